@@ -1,0 +1,383 @@
+//! Closures: weighted sets of lobes, each with its own shading frame, built in a
+//! caller-owned [`Arena`] and immutable once finished.
+//!
+//! Lobe selection for sampling is proportional to `luminance(weight * albedo(wo))`,
+//! computed once in [`Closure::finish`] from the `wo` given at creation (or, without
+//! one, from normal incidence in each lobe's frame). `eval` and `pdf` return the
+//! full mixture, so `pdf` is exactly the density `sample` draws from.
+
+mod arena;
+
+pub use arena::Arena;
+
+use crate::error::{Error, Status};
+use crate::lobes::{LobeType, Transport, flags};
+use crate::math::{Frame, Rgb, Vec3};
+use crate::params;
+use crate::registry::{BUILTINS, Registry};
+
+/// Most lobes a closure holds (`GLINT_MAX_LOBES`).
+pub const MAX_LOBES: usize = 16;
+/// Most parameter values (floats) all lobes of one closure hold together.
+pub const MAX_PARAM_VALUES: usize = 512;
+
+/// One lobe of a closure.
+#[derive(Clone, Copy)]
+pub struct LobeInstance {
+    pub lobe: &'static dyn LobeType,
+    pub type_id: u32,
+    pub weight: Rgb<f32>,
+    pub frame: Frame,
+    params_start: u16,
+    params_len: u16,
+    /// Probability of choosing this lobe when sampling.
+    pub probability: f32,
+}
+
+const EMPTY_LOBE: LobeInstance = LobeInstance {
+    lobe: BUILTINS[0],
+    type_id: 0,
+    weight: Rgb {
+        r: 0.0,
+        g: 0.0,
+        b: 0.0,
+    },
+    frame: Frame::IDENTITY,
+    params_start: 0,
+    params_len: 0,
+    probability: 0.0,
+};
+
+/// Value (cosine included), pdf and reverse pdf of a pair of directions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EvalResult {
+    pub value: Rgb<f32>,
+    pub pdf: f32,
+    /// `pdf(wi -> wo)`, for bidirectional hosts.
+    pub pdf_reverse: f32,
+}
+
+/// A sampled direction and what comes with it (DESIGN.md, "Conventions").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleResult {
+    pub wi: Vec3<f32>,
+    pub value: Rgb<f32>,
+    pub pdf: f32,
+    pub weight: Rgb<f32>,
+    pub flags: u32,
+    pub lobe: u32,
+    pub eta: f32,
+    pub roughness: f32,
+}
+
+/// A weighted set of lobes.
+#[derive(Clone)]
+pub struct Closure {
+    lobes: [LobeInstance; MAX_LOBES],
+    lobe_count: usize,
+    params: [f32; MAX_PARAM_VALUES],
+    params_len: usize,
+    wo: Option<Vec3<f32>>,
+    mode: Transport,
+    finished: bool,
+}
+
+impl Closure {
+    /// An empty closure; `wo` (unit, world space) fixes view-dependent choices.
+    pub fn new(wo: Option<Vec3<f32>>, mode: Transport) -> Closure {
+        Closure {
+            lobes: [EMPTY_LOBE; MAX_LOBES],
+            lobe_count: 0,
+            params: [0.0; MAX_PARAM_VALUES],
+            params_len: 0,
+            wo,
+            mode,
+            finished: false,
+        }
+    }
+
+    pub fn transport(&self) -> Transport {
+        self.mode
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.finished
+    }
+
+    pub fn lobes(&self) -> &[LobeInstance] {
+        &self.lobes[..self.lobe_count]
+    }
+
+    /// The parameter block of lobe `index`.
+    pub fn lobe_params(&self, index: usize) -> &[f32] {
+        let l = &self.lobes[index];
+        let start = l.params_start as usize;
+        &self.params[start..start + l.params_len as usize]
+    }
+
+    /// Add a lobe of type `type_id`. `params` is a full block laid out by the type's
+    /// schema, or `None` for the defaults. Returns the lobe's index.
+    pub fn add_lobe(
+        &mut self,
+        registry: &Registry,
+        type_id: u32,
+        weight: [f32; 3],
+        frame: Frame,
+        params: Option<&[f32]>,
+    ) -> Result<usize, Error> {
+        if self.finished {
+            return Err(Error::new(
+                Status::InvalidState,
+                "the closure is finished; lobes can only be added before glint_closure_finish",
+            ));
+        }
+        let lobe = registry.get(type_id)?;
+        if self.lobe_count == MAX_LOBES {
+            return Err(Error::new(
+                Status::ClosureFull,
+                format!("a closure holds at most {MAX_LOBES} lobes"),
+            ));
+        }
+        if let Some(i) = weight.iter().position(|w| !w.is_finite() || *w < 0.0) {
+            return Err(Error::new(
+                Status::InvalidArgument,
+                format!("{}: weight[{i}] = {} must be finite and >= 0", lobe.name(), weight[i]),
+            ));
+        }
+        let specs = lobe.params();
+        let size = params::block_size(specs);
+        if self.params_len + size > MAX_PARAM_VALUES {
+            return Err(Error::new(
+                Status::ClosureFull,
+                format!("the closure's lobes hold at most {MAX_PARAM_VALUES} parameter values"),
+            ));
+        }
+        let block = &mut self.params[self.params_len..self.params_len + size];
+        match params {
+            Some(values) => {
+                params::validate(lobe.name(), specs, values)?;
+                block.copy_from_slice(values);
+            }
+            None => params::write_defaults(specs, block),
+        }
+        self.lobes[self.lobe_count] = LobeInstance {
+            lobe,
+            type_id,
+            weight: Rgb::new(weight[0], weight[1], weight[2]),
+            frame,
+            params_start: self.params_len as u16,
+            params_len: size as u16,
+            probability: 0.0,
+        };
+        self.params_len += size;
+        self.lobe_count += 1;
+        Ok(self.lobe_count - 1)
+    }
+
+    /// Fix the lobe selection probabilities; the closure is immutable afterwards.
+    pub fn finish(&mut self) -> Result<(), Error> {
+        if self.finished {
+            return Err(Error::new(Status::InvalidState, "the closure is already finished"));
+        }
+        let mut shares = [0.0f32; MAX_LOBES];
+        for (k, l) in self.lobes().iter().enumerate() {
+            let wo = self.wo.map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
+            let albedo = l.lobe.albedo(self.lobe_params(k), wo, self.mode);
+            shares[k] = (l.weight * albedo).luminance().max(0.0);
+        }
+        let n = self.lobe_count;
+        // Without any reflecting lobe at this wo, fall back to the weights, then to uniform.
+        if shares[..n].iter().sum::<f32>() <= 0.0 {
+            for (k, l) in self.lobes().iter().enumerate() {
+                shares[k] = l.weight.luminance().max(0.0);
+            }
+        }
+        if shares[..n].iter().sum::<f32>() <= 0.0 {
+            shares[..n].fill(1.0);
+        }
+        let total: f32 = shares[..n].iter().sum();
+        for (lobe, share) in self.lobes[..n].iter_mut().zip(shares) {
+            lobe.probability = share / total;
+        }
+        self.finished = true;
+        Ok(())
+    }
+
+    fn check_finished(&self) -> Result<(), Error> {
+        if self.finished {
+            Ok(())
+        } else {
+            Err(Error::new(
+                Status::InvalidState,
+                "the closure is not finished; call glint_closure_finish first",
+            ))
+        }
+    }
+
+    fn check_lobe(&self, index: usize) -> Result<&LobeInstance, Error> {
+        self.check_finished()?;
+        self.lobes().get(index).ok_or_else(|| {
+            Error::new(
+                Status::OutOfRange,
+                format!("lobe index {index} is out of range: the closure has {} lobes", self.lobe_count),
+            )
+        })
+    }
+
+    /// `weight * f * |cos|` and the unconditional pdf of one lobe.
+    fn eval_one(&self, k: usize, wo: Vec3<f32>, wi: Vec3<f32>) -> (Rgb<f32>, f32) {
+        let l = &self.lobes[k];
+        let e = l.lobe.eval(
+            self.lobe_params(k),
+            l.frame.to_local(wo),
+            l.frame.to_local(wi),
+            self.mode,
+        );
+        (l.weight * e.value, e.pdf)
+    }
+
+    fn mixture(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> (Rgb<f32>, f32) {
+        let mut value = Rgb::zero();
+        let mut pdf = 0.0;
+        for k in 0..self.lobe_count {
+            let (v, p) = self.eval_one(k, wo, wi);
+            value = value + v;
+            pdf += self.lobes[k].probability * p;
+        }
+        (value, pdf)
+    }
+
+    fn mixture_pdf(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> f32 {
+        self.mixture(wo, wi).1
+    }
+
+    /// The whole closure at `(wo, wi)` (unit vectors, world space).
+    pub fn eval(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<EvalResult, Error> {
+        self.check_finished()?;
+        let (value, pdf) = self.mixture(wo, wi);
+        Ok(EvalResult {
+            value,
+            pdf,
+            pdf_reverse: self.mixture_pdf(wi, wo),
+        })
+    }
+
+    /// The mixture pdf of sampling `wi` from `wo`.
+    pub fn pdf(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<f32, Error> {
+        self.check_finished()?;
+        Ok(self.mixture_pdf(wo, wi))
+    }
+
+    /// Directional albedo: the sum of each lobe's `weight * albedo(wo)`.
+    pub fn albedo(&self, wo: Vec3<f32>) -> Result<Rgb<f32>, Error> {
+        self.check_finished()?;
+        Ok(self.lobes().iter().enumerate().fold(Rgb::zero(), |acc, (k, l)| {
+            acc + l.weight * l.lobe.albedo(self.lobe_params(k), l.frame.to_local(wo), self.mode)
+        }))
+    }
+
+    /// Sample the closure: choose a lobe with `u[0]`, then a direction with the rest.
+    pub fn sample(&self, wo: Vec3<f32>, u: [f32; 3]) -> Result<SampleResult, Error> {
+        self.check_finished()?;
+        let u_lobe = u[0].clamp(0.0, ONE_MINUS_EPSILON);
+        let mut start = 0.0;
+        let mut chosen = self.lobe_count;
+        for (k, l) in self.lobes().iter().enumerate() {
+            if l.probability > 0.0 && u_lobe < start + l.probability {
+                chosen = k;
+                break;
+            }
+            start += l.probability;
+        }
+        if chosen == self.lobe_count {
+            // Round-off left u_lobe past the last bin: take the last lobe that can be chosen.
+            chosen = self.lobes().iter().rposition(|l| l.probability > 0.0).ok_or_else(no_sample)?;
+            start = 1.0 - self.lobes[chosen].probability;
+        }
+        let probability = self.lobes[chosen].probability;
+        let u_reused = ((u_lobe - start) / probability).clamp(0.0, ONE_MINUS_EPSILON);
+        self.sample_from(chosen, wo, [u_reused, u[1], u[2]], Some(probability))
+    }
+
+    /// Sample lobe `index` alone: value is `weight * f |cos|`, pdf that lobe's own.
+    pub fn sample_lobe(&self, index: usize, wo: Vec3<f32>, u: [f32; 3]) -> Result<SampleResult, Error> {
+        self.check_lobe(index)?;
+        self.sample_from(index, wo, u, None)
+    }
+
+    /// Sample lobe `k`; with `mixture = Some(p_k)` the result describes the whole
+    /// closure (mixture value and pdf), else the lobe alone.
+    fn sample_from(
+        &self,
+        k: usize,
+        wo: Vec3<f32>,
+        u: [f32; 3],
+        mixture: Option<f32>,
+    ) -> Result<SampleResult, Error> {
+        let l = &self.lobes[k];
+        let s = l.lobe.sample(self.lobe_params(k), l.frame.to_local(wo), u, self.mode);
+        if !s.valid {
+            return Err(no_sample());
+        }
+        let wi = l.frame.to_world(s.wi).normalize();
+        let (value, pdf) = match mixture {
+            Some(p) if s.delta => (l.weight * s.value, p * s.pdf),
+            Some(_) => self.mixture(wo, wi),
+            None if s.delta => (l.weight * s.value, s.pdf),
+            None => self.eval_one(k, wo, wi),
+        };
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return Err(no_sample());
+        }
+        let class = if s.delta {
+            flags::SPECULAR
+        } else {
+            l.lobe.flags() & (flags::DIFFUSE | flags::GLOSSY)
+        };
+        let side = if s.transmitted {
+            flags::TRANSMISSION
+        } else {
+            flags::REFLECTION
+        };
+        Ok(SampleResult {
+            wi,
+            value,
+            pdf,
+            weight: value.map(|v| v / pdf),
+            flags: side | class,
+            lobe: k as u32,
+            eta: s.eta,
+            roughness: s.roughness,
+        })
+    }
+
+    /// Lobe `index` alone at `(wo, wi)`: `weight * f |cos|`, its own pdf and reverse pdf.
+    pub fn eval_lobe(&self, index: usize, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<EvalResult, Error> {
+        self.check_lobe(index)?;
+        let (value, pdf) = self.eval_one(index, wo, wi);
+        Ok(EvalResult {
+            value,
+            pdf,
+            pdf_reverse: self.eval_one(index, wi, wo).1,
+        })
+    }
+
+    /// The pdf of lobe `index` alone.
+    pub fn pdf_lobe(&self, index: usize, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<f32, Error> {
+        self.check_lobe(index)?;
+        Ok(self.eval_one(index, wo, wi).1)
+    }
+
+    /// `weight * albedo(wo)` of lobe `index`.
+    pub fn albedo_lobe(&self, index: usize, wo: Vec3<f32>) -> Result<Rgb<f32>, Error> {
+        let l = self.check_lobe(index)?;
+        Ok(l.weight * l.lobe.albedo(self.lobe_params(index), l.frame.to_local(wo), self.mode))
+    }
+}
+
+/// The largest `f32` below 1, so that `u < 1` for every sample dimension.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+fn no_sample() -> Error {
+    Error::new(Status::NoSample, "no sample: the closure cannot scatter from this direction")
+}

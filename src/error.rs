@@ -1,0 +1,83 @@
+//! Status codes and errors shared by the Rust API and the C ABI.
+
+use std::borrow::Cow;
+use std::fmt;
+
+/// Why a call failed. The numeric values are the C API's `GLINT_*` status codes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Status {
+    Ok = 0,
+    NullPointer = 1,
+    InvalidArgument = 2,
+    OutOfRange = 3,
+    UnknownName = 4,
+    Parse = 5,
+    StructSize = 6,
+    ArenaFull = 7,
+    ClosureFull = 8,
+    InvalidState = 9,
+    Unsupported = 10,
+    NoSample = 11,
+    Panic = 12,
+}
+
+impl Status {
+    pub const ALL: [Status; 13] = [
+        Status::Ok,
+        Status::NullPointer,
+        Status::InvalidArgument,
+        Status::OutOfRange,
+        Status::UnknownName,
+        Status::Parse,
+        Status::StructSize,
+        Status::ArenaFull,
+        Status::ClosureFull,
+        Status::InvalidState,
+        Status::Unsupported,
+        Status::NoSample,
+        Status::Panic,
+    ];
+
+    pub fn description(self) -> &'static str {
+        match self {
+            Status::Ok => "success",
+            Status::NullPointer => "a required pointer argument is NULL",
+            Status::InvalidArgument => "invalid argument (NaN, infinite, zero-length or malformed)",
+            Status::OutOfRange => "a parameter is outside its valid range",
+            Status::UnknownName => "unknown name (lobe type, parameter, choice or config key)",
+            Status::Parse => "malformed input text (JSON or config)",
+            Status::StructSize => "struct_size is smaller than the structure this library needs",
+            Status::ArenaFull => "the arena has no room for another closure",
+            Status::ClosureFull => "the closure already holds GLINT_MAX_LOBES lobes",
+            Status::InvalidState => "the object is not in a state that allows this call",
+            Status::Unsupported => "not supported by this build or machine",
+            Status::NoSample => "no sample: the lobe cannot scatter from this direction",
+            Status::Panic => "internal error (a panic was caught at the API boundary)",
+        }
+    }
+}
+
+/// A status with a message naming what was wrong.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Error {
+    pub status: Status,
+    pub message: Cow<'static, str>,
+}
+
+impl Error {
+    pub fn new(status: Status, message: impl Into<Cow<'static, str>>) -> Self {
+        Error {
+            status,
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.message)
+    }
+}
+
+impl std::error::Error for Error {}

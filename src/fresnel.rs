@@ -1,0 +1,109 @@
+//! Fresnel reflectance: Schlick, exact dielectric, exact conductor, and
+//! Gulbrandsen's artist-friendly conductor parameterization.
+
+use crate::math::{Lane, Rgb};
+
+/// Generalized Schlick: `F0 + (F90 - F0) (1 - cos)^5` (Schlick 1994; seed 000's `FrnlBlend`).
+#[inline(always)]
+pub fn schlick<L: Lane>(f0: L, f90: L, cos_theta: L) -> L {
+    let m = (L::one() - cos_theta).clamp(L::zero(), L::one());
+    let m2 = m * m;
+    (f90 - f0).mul_add(m2 * m2 * m, f0)
+}
+
+/// Exact unpolarized Fresnel reflectance of a dielectric interface with relative
+/// IOR `eta` (inside over outside); `cos_theta_i < 0` means the ray arrives from inside.
+/// Returns 1 under total internal reflection.
+#[inline(always)]
+pub fn dielectric<L: Lane>(cos_theta_i: L, eta: L) -> L {
+    let cos_i = cos_theta_i.clamp(-L::one(), L::one());
+    let inside = cos_i.lt(L::zero());
+    let eta = L::select(inside, L::one() / eta, eta);
+    let cos_i = cos_i.abs();
+    let sin2_t = (L::one() - cos_i * cos_i) / (eta * eta);
+    let tir = sin2_t.ge(L::one());
+    let cos_t = (L::one() - sin2_t).safe_sqrt();
+    let r_parl = (eta * cos_i - cos_t).safe_div(eta * cos_i + cos_t);
+    let r_perp = (cos_i - eta * cos_t).safe_div(cos_i + eta * cos_t);
+    let f = L::splat(0.5) * (r_parl * r_parl + r_perp * r_perp);
+    L::select(tir, L::one(), f.min(L::one()))
+}
+
+/// Exact unpolarized Fresnel reflectance of a conductor with complex IOR `eta + i k`
+/// (real-valued form of the Fresnel equations, e.g. Lagarde 2013, "Memo on Fresnel
+/// equations"), for `cos_theta` in [0, 1].
+#[inline(always)]
+pub fn conductor<L: Lane>(cos_theta: L, eta: L, k: L) -> L {
+    let cos = cos_theta.clamp(L::zero(), L::one());
+    let cos2 = cos * cos;
+    let sin2 = L::one() - cos2;
+    let eta2 = eta * eta;
+    let k2 = k * k;
+    let t0 = eta2 - k2 - sin2;
+    let a2_plus_b2 = (t0 * t0 + L::splat(4.0) * eta2 * k2).safe_sqrt();
+    let a = (L::splat(0.5) * (a2_plus_b2 + t0)).safe_sqrt();
+    let t1 = a2_plus_b2 + cos2;
+    let t2 = L::splat(2.0) * a * cos;
+    let rs = (t1 - t2).safe_div(t1 + t2);
+    let t3 = cos2 * a2_plus_b2 + sin2 * sin2;
+    let t4 = t2 * sin2;
+    let rp = rs * (t3 - t4).safe_div(t3 + t4);
+    (L::splat(0.5) * (rp + rs)).clamp(L::zero(), L::one())
+}
+
+/// The largest reflectivity Gulbrandsen's mapping accepts: `n_max` and `k` diverge as
+/// `r -> 1`, so reflectivity is clamped here (F at normal incidence stays >= 0.9999).
+pub const GULBRANDSEN_MAX_REFLECTIVITY: f32 = 0.9999;
+
+/// Gulbrandsen 2014 (JCGT 3(4)): reflectivity `r` and edge tint `g` to a complex IOR
+/// `(n, k)`, for one channel.
+#[inline(always)]
+pub fn gulbrandsen_ior<L: Lane>(r: L, g: L) -> (L, L) {
+    let r = r.clamp(L::zero(), L::splat(GULBRANDSEN_MAX_REFLECTIVITY));
+    let g = g.clamp(L::zero(), L::one());
+    let sqrt_r = r.sqrt();
+    let n_min = (L::one() - r) / (L::one() + r);
+    let n_max = (L::one() + sqrt_r) / (L::one() - sqrt_r);
+    let n = g * n_min + (L::one() - g) * n_max;
+    let k2 = (r * (n + L::one()).sqr() - (n - L::one()).sqr()) / (L::one() - r);
+    (n, k2.safe_sqrt())
+}
+
+/// How a reflective lobe computes its Fresnel term; shared by every conductor-like lobe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FresnelModel<L> {
+    /// Schlick with normal and grazing reflectance per channel.
+    Schlick { f0: Rgb<L>, f90: Rgb<L> },
+    /// Exact conductor with complex IOR per channel.
+    Conductor { eta: Rgb<L>, k: Rgb<L> },
+}
+
+impl<L: Lane> FresnelModel<L> {
+    /// The Gulbrandsen parameterization resolved once to an exact conductor.
+    pub fn artistic(reflectivity: Rgb<L>, edge_tint: Rgb<L>) -> Self {
+        let (er, kr) = gulbrandsen_ior(reflectivity.r, edge_tint.r);
+        let (eg, kg) = gulbrandsen_ior(reflectivity.g, edge_tint.g);
+        let (eb, kb) = gulbrandsen_ior(reflectivity.b, edge_tint.b);
+        FresnelModel::Conductor {
+            eta: Rgb::new(er, eg, eb),
+            k: Rgb::new(kr, kg, kb),
+        }
+    }
+
+    #[inline(always)]
+    pub fn eval(&self, cos_theta: L) -> Rgb<L> {
+        match self {
+            FresnelModel::Schlick { f0, f90 } => f0.zip(*f90, |a, b| schlick(a, b, cos_theta)),
+            FresnelModel::Conductor { eta, k } => eta.zip(*k, |n, k| conductor(cos_theta, n, k)),
+        }
+    }
+
+    /// Reflectance at normal incidence and at grazing, the two ends the albedo
+    /// tables interpolate between (exact for Schlick, an approximation otherwise).
+    pub fn normal_and_grazing(&self) -> (Rgb<L>, Rgb<L>) {
+        match self {
+            FresnelModel::Schlick { f0, f90 } => (*f0, *f90),
+            FresnelModel::Conductor { .. } => (self.eval(L::one()), Rgb::splat(L::one())),
+        }
+    }
+}

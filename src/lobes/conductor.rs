@@ -1,0 +1,137 @@
+//! `conductor`: rough metallic reflection, the Cook-Torrance microfacet BRDF
+//! `f = D(h) G2(wo, wi) F(wo.h) / (4 cos_o cos_i)` (Walter et al. 2007 eq. 20) with
+//! GGX or Beckmann normals, anisotropy, Smith height-correlated masking-shadowing and
+//! visible-normal sampling (see `crate::microfacet`).
+//!
+//! Parameters:
+//! - `distribution` (enum `ggx` | `beckmann`, default `ggx`);
+//! - `roughness` (float, [0, 1], default 0.3): `alpha = roughness^2`; below
+//!   `microfacet::DELTA_ALPHA` the lobe is a perfect mirror (delta);
+//! - `anisotropic` (float, [0, 1], default 0): stretches alpha along the frame's tangent;
+//! - the Fresnel group (`fresnel` = `schlick` | `conductor` | `artistic`, default
+//!   `artistic`, with `f0`, `f90`, `eta`, `k`, `reflectivity`, `edge_tint`).
+//!
+//! Sampling draws a visible normal, so the weight is `F G2 / G1`. Albedo: the
+//! split-sum table of `crate::albedo_table` with `(F(0 deg), F90)` (exact for
+//! Schlick, an approximation for complex IORs); exact `F(cos_o)` when delta.
+//! One-sided: 0 when either direction is below the surface.
+
+use super::fresnel_params::{self, with_fresnel_params};
+use super::{Eval, Model, Params, Sample, Transport, both_above, flags};
+use crate::albedo_table::AlbedoTable;
+use crate::fresnel::FresnelModel;
+use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::microfacet::{Distribution, NdfKind};
+use crate::params::{ParamSpec, offset_of};
+
+pub struct Conductor;
+
+/// Choices of the `distribution` parameter, shared by every microfacet lobe.
+pub const DISTRIBUTION_CHOICES: &[&str] = &["ggx", "beckmann"];
+
+pub(crate) fn ndf_kind(choice: usize) -> NdfKind {
+    if choice == 1 { NdfKind::Beckmann } else { NdfKind::Ggx }
+}
+
+const DISTRIBUTION: usize = offset_of(Conductor::PARAMS, 0);
+const ROUGHNESS: usize = offset_of(Conductor::PARAMS, 1);
+const ANISOTROPIC: usize = offset_of(Conductor::PARAMS, 2);
+const FRESNEL: usize = offset_of(Conductor::PARAMS, 3);
+
+pub struct Prepared<L> {
+    dist: Distribution<L>,
+    fresnel: FresnelModel<L>,
+    roughness: L,
+}
+
+impl Model for Conductor {
+    const NAME: &'static str = "conductor";
+    const SUMMARY: &'static str =
+        "Rough conductor: GGX/Beckmann microfacets, anisotropic, Schlick/complex/artistic Fresnel";
+    const PARAMS: &'static [ParamSpec] = with_fresnel_params!(2;
+        ParamSpec::choice("distribution", DISTRIBUTION_CHOICES, 0, "microfacet normal distribution"),
+        ParamSpec::float("roughness", 0.3, 0.0, 1.0, "alpha = roughness^2; below 0.0316 a perfect mirror"),
+        ParamSpec::float("anisotropic", 0.0, 0.0, 1.0, "stretch along the tangent (Burley 2012 mapping)"),
+    );
+    const FLAGS: u32 = flags::REFLECTION | flags::GLOSSY | flags::SPECULAR;
+    const RECIPROCAL: bool = true;
+
+    type Prepared<L: Lane> = Prepared<L>;
+
+    fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
+        let roughness = params.float(ROUGHNESS);
+        Prepared {
+            dist: Distribution::from_roughness(
+                ndf_kind(params.choice(DISTRIBUTION)),
+                roughness,
+                params.float(ANISOTROPIC),
+            ),
+            fresnel: fresnel_params::decode(&params, FRESNEL),
+            roughness,
+        }
+    }
+
+    fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, _mode: Transport) -> Eval<L> {
+        let ok = both_above(wo, wi) & !p.dist.is_delta();
+        if !ok.any() {
+            return Eval::zero();
+        }
+        let h = (wo + wi).normalize();
+        let d = p.dist.d(h);
+        // The cos_i of eval's cosine-weighted value cancels the BRDF's 1 / cos_i.
+        let inv_4cos_o = L::select(ok, L::splat(0.25) / wo.z, L::zero());
+        let value = p.fresnel.eval(wo.dot(h)) * (d * p.dist.g2(wo, wi) * inv_4cos_o);
+        // pdf = D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 cos_o)  (Heitz 2018 eq. 17).
+        let pdf = p.dist.g1(wo) * d * inv_4cos_o;
+        Eval { value, pdf }
+    }
+
+    fn sample<L: Lane>(
+        p: &Prepared<L>,
+        wo: Vec3<L>,
+        _uc: L,
+        u0: L,
+        u1: L,
+        _mode: Transport,
+    ) -> Sample<L> {
+        let delta = p.dist.is_delta();
+        let up = Vec3::splat(0.0, 0.0, 1.0);
+        let m = Vec3::select(delta, up, p.dist.sample_visible(wo, u0, u1));
+        let wi = wo.reflect(m);
+        let valid = both_above(wo, wi);
+        let f = p.fresnel.eval(wo.dot(m));
+        let inv_4cos_o = L::splat(0.25).safe_div(wo.z);
+        let d = p.dist.d(m);
+        let rough_scale = d * p.dist.g2(wo, wi) * inv_4cos_o;
+        let rough_pdf = p.dist.g1(wo) * d * inv_4cos_o;
+        Sample {
+            wi,
+            value: f * L::select(delta, L::one(), rough_scale),
+            pdf: L::select(delta, L::one(), rough_pdf),
+            valid,
+            transmitted: L::Mask::splat(false),
+            delta,
+            eta: L::one(),
+            roughness: L::select(delta, L::zero(), p.roughness),
+        }
+    }
+
+    fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
+        microfacet_reflection_albedo(&p.dist, &p.fresnel, wo)
+    }
+}
+
+/// Albedo of a one-sided microfacet reflection lobe with Fresnel `fresnel`: the
+/// split-sum table when rough, exact `F(cos_o)` when delta.
+pub(crate) fn microfacet_reflection_albedo<L: Lane>(
+    dist: &Distribution<L>,
+    fresnel: &FresnelModel<L>,
+    wo: Vec3<L>,
+) -> Rgb<L> {
+    let (a, b) = AlbedoTable::get(dist.kind).lookup(wo.z, dist);
+    let (f0, f90) = fresnel.normal_and_grazing();
+    let rough = f0 * a + f90 * b;
+    let exact = fresnel.eval(wo.z);
+    let albedo = Rgb::select(dist.is_delta(), exact, rough);
+    Rgb::select(wo.z.gt(L::zero()), albedo, Rgb::zero())
+}

@@ -1,0 +1,215 @@
+//! `dielectric`: a rough dielectric interface that reflects and refracts (Walter
+//! et al. 2007, "Microfacet Models for Refraction through Rough Surfaces"), two-sided:
+//! `wo` below the surface means the path is inside the medium.
+//!
+//! Reflection `f_r = F D G2 / (4 |cos_o cos_i|)` (Walter eq. 20); transmission
+//! `f_t = |wi.h| |wo.h| eta_t^2 (1 - F) D G2 / (|cos_i cos_o| (eta_i wi.h + eta_t wo.h)^2)`
+//! (Walter eq. 21), divided by `eta^2` for radiance transport (Veach 1997 §5.2),
+//! so it is not reciprocal. Reflection is chosen with probability `F(wo.m)` for a
+//! sampled visible normal `m`; total internal reflection gives `F = 1`.
+//!
+//! Parameters:
+//! - `distribution` (enum `ggx` | `beckmann`, default `ggx`);
+//! - `roughness` (float, [0, 1], default 0.1): below `microfacet::DELTA_ALPHA`
+//!   (`roughness < 0.0316`) the interface is smooth: exact delta reflection and refraction;
+//! - `anisotropic` (float, [0, 1], default 0);
+//! - `eta` (float, [0.001, 1000], default 1.5): IOR inside over outside. Within
+//!   1e-4 of 1 the interface is index-matched and treated as smooth (the rough
+//!   half-vector is undefined when `wi = -wo`).
+//!
+//! Albedo: exact `F + (1 - F) / eta'^2` (radiance) when smooth; when rough, that
+//! times the single-scattering energy `A + B` of `crate::albedo_table`, an
+//! approximation whose error is measured in the tests.
+
+use super::conductor::{DISTRIBUTION_CHOICES, ndf_kind};
+use super::{Eval, Model, Params, Sample, Transport, flags};
+use crate::albedo_table::AlbedoTable;
+use crate::fresnel;
+use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::microfacet::Distribution;
+use crate::params::{ParamSpec, offset_of};
+
+pub struct Dielectric;
+
+/// `|eta - 1|` below which the interface is index-matched (smooth pass-through).
+pub const INDEX_MATCHED: f32 = 1e-4;
+
+const DISTRIBUTION: usize = offset_of(Dielectric::PARAMS, 0);
+const ROUGHNESS: usize = offset_of(Dielectric::PARAMS, 1);
+const ANISOTROPIC: usize = offset_of(Dielectric::PARAMS, 2);
+const ETA: usize = offset_of(Dielectric::PARAMS, 3);
+
+pub struct Prepared<L: Lane> {
+    dist: Distribution<L>,
+    eta: L,
+    roughness: L,
+    smooth: L::Mask,
+}
+
+/// Refract `w` through the interface with normal `n` and relative IOR `eta`
+/// (pbrt-v4 `Refract`). Returns the refracted direction, the IOR ratio `eta'` seen
+/// from `w`'s side, and the lanes without total internal reflection.
+#[inline(always)]
+fn refract<L: Lane>(w: Vec3<L>, n: Vec3<L>, eta: L) -> (Vec3<L>, L, L::Mask) {
+    let cos_i = n.dot(w);
+    let inside = cos_i.lt(L::zero());
+    let eta = L::select(inside, L::one() / eta, eta);
+    let n = Vec3::select(inside, -n, n);
+    let cos_i = cos_i.abs();
+    let sin2_t = (L::one() - cos_i * cos_i).max(L::zero()) / (eta * eta);
+    let ok = sin2_t.lt(L::one());
+    let cos_t = (L::one() - sin2_t).safe_sqrt();
+    let wt = -w * (L::one() / eta) + n * (cos_i / eta - cos_t);
+    (wt, eta, ok)
+}
+
+/// The radiance-transport scale of a transmitted path, `1 / eta'^2`.
+#[inline(always)]
+fn transmission_scale<L: Lane>(etap: L, mode: Transport) -> L {
+    match mode {
+        Transport::Radiance => L::one() / (etap * etap),
+        Transport::Importance => L::one(),
+    }
+}
+
+impl Dielectric {
+    /// Value (cosine included) and pdf of the rough interface for a pair whose
+    /// generalized half vector is `wm` (Walter eqs. 20, 21 and the Jacobians 14, 17).
+    #[inline(always)]
+    fn rough_eval<L: Lane>(
+        p: &Prepared<L>,
+        wo: Vec3<L>,
+        wi: Vec3<L>,
+        wm: Vec3<L>,
+        etap: L,
+        reflect: L::Mask,
+        mode: Transport,
+    ) -> (L, L) {
+        let cos_o = wo.z;
+        let (wo_m, wi_m) = (wo.dot(wm), wi.dot(wm));
+        let f = fresnel::dielectric(wo_m, p.eta);
+        let d = p.dist.d(wm);
+        let g = p.dist.g2(wo, wi);
+        let pdf_m = p.dist.pdf_visible(wo, wm);
+        let refl_value = (f * d * g).safe_div(L::splat(4.0) * cos_o.abs());
+        let refl_pdf = (pdf_m * f).safe_div(L::splat(4.0) * wo_m.abs());
+        let denom = (wi_m + wo_m / etap).sqr();
+        let t = L::one() - f;
+        let trans_value = (t * d * g * (wi_m * wo_m).abs()).safe_div(cos_o.abs() * denom)
+            * transmission_scale(etap, mode);
+        let trans_pdf = (pdf_m * wi_m.abs() * t).safe_div(denom);
+        (
+            L::select(reflect, refl_value, trans_value),
+            L::select(reflect, refl_pdf, trans_pdf),
+        )
+    }
+}
+
+impl Model for Dielectric {
+    const NAME: &'static str = "dielectric";
+    const SUMMARY: &'static str =
+        "Rough dielectric interface (Walter 2007): reflection and refraction, delta when smooth";
+    const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec::choice("distribution", DISTRIBUTION_CHOICES, 0, "microfacet normal distribution"),
+        ParamSpec::float("roughness", 0.1, 0.0, 1.0, "alpha = roughness^2; below 0.0316 smooth (delta)"),
+        ParamSpec::float("anisotropic", 0.0, 0.0, 1.0, "stretch along the tangent (Burley 2012 mapping)"),
+        ParamSpec::float("eta", 1.5, 0.001, 1000.0, "relative IOR, inside over outside"),
+    ];
+    const FLAGS: u32 =
+        flags::REFLECTION | flags::TRANSMISSION | flags::GLOSSY | flags::SPECULAR;
+    const RECIPROCAL: bool = false;
+
+    type Prepared<L: Lane> = Prepared<L>;
+
+    fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
+        let roughness = params.float(ROUGHNESS);
+        let eta = params.float(ETA);
+        let dist = Distribution::from_roughness(
+            ndf_kind(params.choice(DISTRIBUTION)),
+            roughness,
+            params.float(ANISOTROPIC),
+        );
+        let matched = (eta - L::one()).abs().lt(L::splat(INDEX_MATCHED));
+        Prepared {
+            smooth: dist.is_delta() | matched,
+            dist,
+            eta,
+            roughness,
+        }
+    }
+
+    fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L> {
+        let (cos_o, cos_i) = (wo.z, wi.z);
+        let reflect = (cos_o * cos_i).gt(L::zero());
+        let etap = L::select(
+            reflect,
+            L::one(),
+            L::select(cos_o.gt(L::zero()), p.eta, L::one() / p.eta),
+        );
+        // Generalized half vector (Walter eq. 16), on the normal's side.
+        let wm_raw = wi * etap + wo;
+        let wm = wm_raw.normalize();
+        let wm = Vec3::select(wm.z.lt(L::zero()), -wm, wm);
+        // Discard back-facing microfacets (Walter §5.3).
+        let valid = !p.smooth
+            & cos_i.abs().gt(L::zero())
+            & cos_o.abs().gt(L::zero())
+            & wm_raw.length_squared().gt(L::zero())
+            & (wm.dot(wi) * cos_i).gt(L::zero())
+            & (wm.dot(wo) * cos_o).gt(L::zero());
+        if !valid.any() {
+            return Eval::zero();
+        }
+        let (value, pdf) = Self::rough_eval(p, wo, wi, wm, etap, reflect, mode);
+        Eval {
+            value: Rgb::splat(L::select(valid, value, L::zero())),
+            pdf: L::select(valid, pdf, L::zero()),
+        }
+    }
+
+    fn sample<L: Lane>(
+        p: &Prepared<L>,
+        wo: Vec3<L>,
+        uc: L,
+        u0: L,
+        u1: L,
+        mode: Transport,
+    ) -> Sample<L> {
+        let up = Vec3::splat(0.0, 0.0, 1.0);
+        let wm = Vec3::select(p.smooth, up, p.dist.sample_visible(wo, u0, u1));
+        let wo_m = wo.dot(wm);
+        let f = fresnel::dielectric(wo_m, p.eta);
+        let reflect = uc.lt(f);
+        let (wt, etap_t, no_tir) = refract(wo, wm, p.eta);
+        let wi = Vec3::select(reflect, wo.reflect(wm), wt);
+        let etap = L::select(reflect, L::one(), etap_t);
+        let same_side = (wo.z * wi.z).gt(L::zero());
+        let opposite = (wo.z * wi.z).lt(L::zero());
+        let valid = (reflect & same_side) | (!reflect & no_tir & opposite);
+        // Smooth: the discrete probabilities F and 1 - F, value the same fraction.
+        let t_scale = transmission_scale(etap, mode);
+        let smooth_value = L::select(reflect, f, (L::one() - f) * t_scale);
+        let smooth_pdf = L::select(reflect, f, L::one() - f);
+        let (rough_value, rough_pdf) = Self::rough_eval(p, wo, wi, wm, etap, reflect, mode);
+        Sample {
+            wi,
+            value: Rgb::splat(L::select(p.smooth, smooth_value, rough_value)),
+            pdf: L::select(p.smooth, smooth_pdf, rough_pdf),
+            valid,
+            transmitted: !reflect,
+            delta: p.smooth,
+            eta: etap,
+            roughness: L::select(p.smooth, L::zero(), p.roughness),
+        }
+    }
+
+    fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, mode: Transport) -> Rgb<L> {
+        let cos_o = wo.z;
+        let f = fresnel::dielectric(cos_o, p.eta);
+        let etap = L::select(cos_o.gt(L::zero()), p.eta, L::one() / p.eta);
+        let smooth = f + (L::one() - f) * transmission_scale(etap, mode);
+        let (a, b) = AlbedoTable::get(p.dist.kind).lookup(cos_o.abs(), &p.dist);
+        let albedo = L::select(p.smooth, smooth, smooth * (a + b));
+        Rgb::splat(L::select(cos_o.eq(L::zero()), L::zero(), albedo))
+    }
+}

@@ -1,0 +1,82 @@
+//! `lambert`: ideal diffuse reflection, `f = color / pi` (Lambert 1760; seed 001,
+//! "Light Intensities").
+//!
+//! Parameters:
+//! - `color` (rgb, [0, 1], default 0.8): the albedo.
+//!
+//! Sampling is cosine-weighted (`pdf = cos theta_i / pi`), so the sample weight is
+//! exactly `color`. Albedo is the closed form `color`. One-sided: 0 below the surface.
+
+use super::{Eval, Model, Params, Sample, Transport, both_above, flags};
+use crate::math::{INV_PI, Lane, Mask, PI, Rgb, Vec3};
+use crate::params::{ParamSpec, offset_of};
+
+pub struct Lambert;
+
+const COLOR: usize = offset_of(Lambert::PARAMS, 0);
+
+pub struct Prepared<L> {
+    color: Rgb<L>,
+}
+
+impl Model for Lambert {
+    const NAME: &'static str = "lambert";
+    const SUMMARY: &'static str = "Ideal diffuse reflection (Lambert)";
+    const PARAMS: &'static [ParamSpec] = &[ParamSpec::rgb(
+        "color",
+        [0.8; 3],
+        0.0,
+        1.0,
+        "diffuse albedo",
+    )];
+    const FLAGS: u32 = flags::REFLECTION | flags::DIFFUSE;
+    const RECIPROCAL: bool = true;
+
+    type Prepared<L: Lane> = Prepared<L>;
+
+    fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
+        Prepared {
+            color: params.rgb(COLOR),
+        }
+    }
+
+    fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, _mode: Transport) -> Eval<L> {
+        let ok = both_above(wo, wi);
+        let cos_i = L::select(ok, wi.z, L::zero());
+        Eval {
+            value: p.color * (cos_i * L::splat(INV_PI)),
+            pdf: cos_i * L::splat(INV_PI),
+        }
+    }
+
+    fn sample<L: Lane>(
+        p: &Prepared<L>,
+        wo: Vec3<L>,
+        _uc: L,
+        u0: L,
+        u1: L,
+        _mode: Transport,
+    ) -> Sample<L> {
+        // Malley's method: uniform disk point lifted to the hemisphere.
+        let r = u0.sqrt();
+        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
+        let z = (L::one() - u0).safe_sqrt();
+        let wi = Vec3::new(r * cos_phi, r * sin_phi, z);
+        let valid = both_above(wo, wi);
+        let pdf = z * L::splat(INV_PI);
+        Sample {
+            wi,
+            value: p.color * pdf,
+            pdf,
+            valid,
+            transmitted: L::Mask::splat(false),
+            delta: L::Mask::splat(false),
+            eta: L::one(),
+            roughness: L::one(),
+        }
+    }
+
+    fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
+        Rgb::select(wo.z.gt(L::zero()), p.color, Rgb::zero())
+    }
+}

@@ -1,0 +1,67 @@
+//! `mirror`: perfect specular reflection, a delta lobe: `wi = reflect(wo, n)` with
+//! the reflected fraction given by the shared Fresnel group (default: Schlick with
+//! `f0 = f90 = 1`, a perfect white mirror).
+//!
+//! Parameters: the Fresnel group (`fresnel` = `schlick` | `conductor` | `artistic`,
+//! with `f0`, `f90`, `eta`, `k`, `reflectivity`, `edge_tint`).
+//!
+//! eval and pdf are 0 (delta); a sample has value `F(cos_o)`, pdf 1 (the discrete
+//! probability) and the SPECULAR flag. Albedo is exactly `F(cos_o)`. One-sided.
+
+use super::fresnel_params::{self, with_fresnel_params};
+use super::{Eval, Model, Params, Sample, Transport, flags};
+use crate::fresnel::FresnelModel;
+use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::params::{ParamSpec, offset_of};
+
+pub struct Mirror;
+
+const FRESNEL: usize = offset_of(Mirror::PARAMS, 0);
+
+pub struct Prepared<L> {
+    fresnel: FresnelModel<L>,
+}
+
+impl Model for Mirror {
+    const NAME: &'static str = "mirror";
+    const SUMMARY: &'static str = "Perfect specular reflection (delta) with a choice of Fresnel";
+    const PARAMS: &'static [ParamSpec] = with_fresnel_params!(0;);
+    const FLAGS: u32 = flags::REFLECTION | flags::SPECULAR;
+    const RECIPROCAL: bool = true;
+
+    type Prepared<L: Lane> = Prepared<L>;
+
+    fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
+        Prepared {
+            fresnel: fresnel_params::decode(&params, FRESNEL),
+        }
+    }
+
+    fn eval<L: Lane>(_p: &Prepared<L>, _wo: Vec3<L>, _wi: Vec3<L>, _mode: Transport) -> Eval<L> {
+        Eval::zero()
+    }
+
+    fn sample<L: Lane>(
+        p: &Prepared<L>,
+        wo: Vec3<L>,
+        _uc: L,
+        _u0: L,
+        _u1: L,
+        _mode: Transport,
+    ) -> Sample<L> {
+        Sample {
+            wi: Vec3::new(-wo.x, -wo.y, wo.z),
+            value: p.fresnel.eval(wo.z),
+            pdf: L::one(),
+            valid: wo.z.gt(L::zero()),
+            transmitted: L::Mask::splat(false),
+            delta: L::Mask::splat(true),
+            eta: L::one(),
+            roughness: L::zero(),
+        }
+    }
+
+    fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
+        Rgb::select(wo.z.gt(L::zero()), p.fresnel.eval(wo.z), Rgb::zero())
+    }
+}

@@ -1,0 +1,240 @@
+//! The lobe contract and the built-in lobes, one model per file.
+//!
+//! A lobe model implements [`Model`]: its parameter schema, and `eval`, `sample`
+//! and `albedo` written once over the [`Lane`] type, in the lobe's local frame
+//! (z = normal, directions pointing away from the surface). [`Builtin`] adapts a
+//! model to the object-safe [`LobeType`] that the registry and closures use, so
+//! plugin lobes (which are not generic) fit the same slot.
+//!
+//! Conventions (DESIGN.md): `eval` returns `f(wo, wi) |cos theta_i|` and the pdf of
+//! sampling `wi`; delta lobes return 0 from eval and pdf, and their samples carry
+//! the SPECULAR flag, `value` = the reflected or transmitted fraction and `pdf` = the
+//! discrete probability of the chosen event.
+
+pub mod conductor;
+pub mod dielectric;
+pub mod fresnel_params;
+pub mod lambert;
+pub mod mirror;
+
+use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::params::ParamSpec;
+use std::marker::PhantomData;
+
+/// Sample and lobe flags (bit set), as in the C API's `GLINT_FLAG_*`.
+pub mod flags {
+    pub const REFLECTION: u32 = 1;
+    pub const TRANSMISSION: u32 = 2;
+    pub const DIFFUSE: u32 = 4;
+    pub const GLOSSY: u32 = 8;
+    pub const SPECULAR: u32 = 16;
+}
+
+/// Whether the path carries radiance (from the camera) or importance (from lights).
+/// Only refraction differs: radiance transmission is scaled by `1 / eta^2`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Transport {
+    #[default]
+    Radiance,
+    Importance,
+}
+
+/// `f(wo, wi) |cos theta_i|` and the pdf of sampling `wi` from `wo`.
+#[derive(Clone, Copy, Debug)]
+pub struct Eval<L> {
+    pub value: Rgb<L>,
+    pub pdf: L,
+}
+
+impl<L: Lane> Eval<L> {
+    pub fn zero() -> Self {
+        Eval {
+            value: Rgb::zero(),
+            pdf: L::zero(),
+        }
+    }
+}
+
+/// The result of sampling a lobe. Lanes where `valid` is false failed to sample and
+/// carry zeros.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample<L: Lane> {
+    pub wi: Vec3<L>,
+    pub value: Rgb<L>,
+    pub pdf: L,
+    pub valid: L::Mask,
+    pub transmitted: L::Mask,
+    pub delta: L::Mask,
+    /// Relative IOR crossed by a transmitted sample, 1 otherwise.
+    pub eta: L,
+    /// The lobe's roughness in [0, 1] (0 for delta samples), a hint for path regularization.
+    pub roughness: L,
+}
+
+impl<L: Lane> Sample<L> {
+    /// Zero the lanes that are invalid or whose pdf or value is not a finite
+    /// positive number, so that no caller ever sees NaN or a weight with zero pdf.
+    #[inline(always)]
+    pub fn finish(mut self) -> Self {
+        let ok = self.valid
+            & self.pdf.gt(L::zero())
+            & self.pdf.is_finite()
+            & self.value.r.is_finite()
+            & self.value.g.is_finite()
+            & self.value.b.is_finite();
+        self.valid = ok;
+        self.pdf = L::select(ok, self.pdf, L::zero());
+        self.value = Rgb::select(ok, self.value.map(|v| v.max(L::zero())), Rgb::zero());
+        self.wi = Vec3::select(ok, self.wi, Vec3::new(L::zero(), L::zero(), L::zero()));
+        self
+    }
+
+    /// `value / pdf`, 0 where the sample failed.
+    #[inline(always)]
+    pub fn weight(&self) -> Rgb<L> {
+        let pdf = self.pdf;
+        self.value.map(|v| v.safe_div(pdf))
+    }
+}
+
+/// Read access to a lobe's parameter block, laid out by its schema.
+#[derive(Clone, Copy)]
+pub struct Params<'a, L> {
+    raw: &'a [L],
+}
+
+impl<'a, L: Lane> Params<'a, L> {
+    pub fn new(raw: &'a [L]) -> Self {
+        Params { raw }
+    }
+    #[inline(always)]
+    pub fn float(&self, offset: usize) -> L {
+        self.raw[offset]
+    }
+    #[inline(always)]
+    pub fn rgb(&self, offset: usize) -> Rgb<L> {
+        Rgb::new(self.raw[offset], self.raw[offset + 1], self.raw[offset + 2])
+    }
+    /// An enumerated choice; uniform across lanes by construction of batch groups.
+    #[inline(always)]
+    pub fn choice(&self, offset: usize) -> usize {
+        self.raw[offset].lane0() as usize
+    }
+}
+
+/// A lobe model, written once over the lane type.
+pub trait Model: Send + Sync + 'static {
+    const NAME: &'static str;
+    /// One line for registries and UIs.
+    const SUMMARY: &'static str;
+    const PARAMS: &'static [ParamSpec];
+    /// Every flag a sample of this lobe may carry.
+    const FLAGS: u32;
+    /// Whether `f(wo, wi) == f(wi, wo)` holds for the raw BSDF (radiance transport).
+    const RECIPROCAL: bool;
+
+    /// Parameters decoded once per call (Fresnel resolved, roughness mapped).
+    type Prepared<L: Lane>;
+
+    fn prepare<L: Lane>(params: Params<'_, L>) -> Self::Prepared<L>;
+    fn eval<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L>;
+    /// `uc` chooses among discrete events (reflect or refract); `u0`, `u1` pick the direction.
+    fn sample<L: Lane>(
+        p: &Self::Prepared<L>,
+        wo: Vec3<L>,
+        uc: L,
+        u0: L,
+        u1: L,
+        mode: Transport,
+    ) -> Sample<L>;
+    /// Directional albedo `R(wo)`: the integral of `eval(wo, wi)` over all `wi`.
+    fn albedo<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, mode: Transport) -> Rgb<L>;
+}
+
+/// A lobe type as the registry and closures see it: scalar, object-safe, and the
+/// same for built-in and plugin lobes.
+pub trait LobeType: Send + Sync {
+    fn name(&self) -> &str;
+    fn summary(&self) -> &str;
+    fn params(&self) -> &[ParamSpec];
+    fn flags(&self) -> u32;
+    fn reciprocal(&self) -> bool;
+    fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32>;
+    fn sample(
+        &self,
+        params: &[f32],
+        wo: Vec3<f32>,
+        u: [f32; 3],
+        mode: Transport,
+    ) -> Sample<f32>;
+    fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32>;
+}
+
+/// The [`LobeType`] of a built-in [`Model`].
+pub struct Builtin<M>(PhantomData<M>);
+
+impl<M> Builtin<M> {
+    pub const fn new() -> Self {
+        Builtin(PhantomData)
+    }
+}
+
+impl<M: Model> Default for Builtin<M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<M: Model> LobeType for Builtin<M> {
+    fn name(&self) -> &str {
+        M::NAME
+    }
+    fn summary(&self) -> &str {
+        M::SUMMARY
+    }
+    fn params(&self) -> &[ParamSpec] {
+        M::PARAMS
+    }
+    fn flags(&self) -> u32 {
+        M::FLAGS
+    }
+    fn reciprocal(&self) -> bool {
+        M::RECIPROCAL
+    }
+    fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
+        M::eval(&M::prepare(Params::new(params)), wo, wi, mode)
+    }
+    fn sample(
+        &self,
+        params: &[f32],
+        wo: Vec3<f32>,
+        u: [f32; 3],
+        mode: Transport,
+    ) -> Sample<f32> {
+        M::sample(&M::prepare(Params::new(params)), wo, u[0], u[1], u[2], mode).finish()
+    }
+    fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
+        M::albedo(&M::prepare(Params::new(params)), wo, mode)
+    }
+}
+
+/// Lanes where both directions are strictly above the surface.
+#[inline(always)]
+pub fn both_above<L: Lane>(wo: Vec3<L>, wi: Vec3<L>) -> L::Mask {
+    wo.z.gt(L::zero()) & wi.z.gt(L::zero())
+}
+
+/// A sample where every lane failed.
+pub fn no_sample<L: Lane>() -> Sample<L> {
+    Sample {
+        wi: Vec3::new(L::zero(), L::zero(), L::zero()),
+        value: Rgb::zero(),
+        pdf: L::zero(),
+        valid: L::Mask::splat(false),
+        transmitted: L::Mask::splat(false),
+        delta: L::Mask::splat(false),
+        eta: L::one(),
+        roughness: L::zero(),
+    }
+}
+

@@ -1,0 +1,204 @@
+//! The lane abstraction: every lobe is written once against [`Lane`], a value
+//! that holds one `f32` per SIMD lane. The scalar path instantiates it with
+//! plain `f32`; the SIMD batch kernels add vector lane types that implement the
+//! same trait, so no lobe is ever written twice.
+//!
+//! Control flow that differs per lane is written with masks and [`Lane::select`];
+//! `Mask::any`/`Mask::all` let code skip work no lane needs.
+
+use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub, SubAssign};
+
+/// A per-lane boolean.
+pub trait Mask: Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self> {
+    fn splat(value: bool) -> Self;
+    /// True when at least one lane is set.
+    fn any(self) -> bool;
+    /// True when every lane is set.
+    fn all(self) -> bool;
+}
+
+/// A per-lane `f32`, with the operations lobes need.
+pub trait Lane:
+    Copy
+    + Send
+    + Sync
+    + 'static
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+{
+    type Mask: Mask;
+
+    fn splat(value: f32) -> Self;
+    fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
+
+    fn lt(self, other: Self) -> Self::Mask;
+    fn le(self, other: Self) -> Self::Mask;
+    fn gt(self, other: Self) -> Self::Mask;
+    fn ge(self, other: Self) -> Self::Mask;
+    fn eq(self, other: Self) -> Self::Mask;
+    /// Lanes that are neither NaN nor infinite.
+    fn is_finite(self) -> Self::Mask;
+
+    fn abs(self) -> Self;
+    fn min(self, other: Self) -> Self;
+    fn max(self, other: Self) -> Self;
+    /// `self * a + b`, fused where the ISA has FMA.
+    fn mul_add(self, a: Self, b: Self) -> Self;
+    fn sqrt(self) -> Self;
+    fn exp(self) -> Self;
+    fn ln(self) -> Self;
+    /// `ln(1 + self)`, accurate for small arguments.
+    fn ln_1p(self) -> Self;
+    fn sin_cos(self) -> (Self, Self);
+    fn acos(self) -> Self;
+    fn copysign(self, sign: Self) -> Self;
+    /// The value of the first lane. Used only for parameters that are uniform across
+    /// a batch group (enumerated choices), which the batch layer guarantees.
+    fn lane0(self) -> f32;
+    fn floor(self) -> Self;
+    /// `table[index]` per lane; `index` holds integral values in `0..table.len()`.
+    fn gather(table: &[f32], index: Self) -> Self;
+
+    #[inline(always)]
+    fn zero() -> Self {
+        Self::splat(0.0)
+    }
+    #[inline(always)]
+    fn one() -> Self {
+        Self::splat(1.0)
+    }
+    #[inline(always)]
+    fn clamp(self, lo: Self, hi: Self) -> Self {
+        self.max(lo).min(hi)
+    }
+    #[inline(always)]
+    fn sqr(self) -> Self {
+        self * self
+    }
+    /// `sqrt(max(self, 0))`: never NaN for slightly negative round-off.
+    #[inline(always)]
+    fn safe_sqrt(self) -> Self {
+        self.max(Self::zero()).sqrt()
+    }
+    /// `self / d` where `d != 0`, else 0. Keeps guarded divisions readable.
+    #[inline(always)]
+    fn safe_div(self, d: Self) -> Self {
+        let nonzero = d.abs().gt(Self::zero());
+        Self::select(nonzero, self / Self::select(nonzero, d, Self::one()), Self::zero())
+    }
+}
+
+impl Mask for bool {
+    #[inline(always)]
+    fn splat(value: bool) -> Self {
+        value
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        self
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        self
+    }
+}
+
+impl Lane for f32 {
+    type Mask = bool;
+
+    #[inline(always)]
+    fn splat(value: f32) -> Self {
+        value
+    }
+    #[inline(always)]
+    fn select(mask: bool, if_true: Self, if_false: Self) -> Self {
+        if mask { if_true } else { if_false }
+    }
+    #[inline(always)]
+    fn lt(self, other: Self) -> bool {
+        self < other
+    }
+    #[inline(always)]
+    fn le(self, other: Self) -> bool {
+        self <= other
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> bool {
+        self > other
+    }
+    #[inline(always)]
+    fn ge(self, other: Self) -> bool {
+        self >= other
+    }
+    #[inline(always)]
+    fn eq(self, other: Self) -> bool {
+        self == other
+    }
+    #[inline(always)]
+    fn is_finite(self) -> bool {
+        f32::is_finite(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn min(self, other: Self) -> Self {
+        f32::min(self, other)
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        f32::max(self, other)
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        // Plain multiply-add: `f32::mul_add` is a libm call without FMA in the baseline ISA.
+        self * a + b
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        f32::exp(self)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        f32::ln(self)
+    }
+    #[inline(always)]
+    fn ln_1p(self) -> Self {
+        f32::ln_1p(self)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        f32::sin_cos(self)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        f32::acos(self)
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        f32::copysign(self, sign)
+    }
+    #[inline(always)]
+    fn lane0(self) -> f32 {
+        self
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        f32::floor(self)
+    }
+    #[inline(always)]
+    fn gather(table: &[f32], index: Self) -> Self {
+        table[index as usize]
+    }
+}

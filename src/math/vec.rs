@@ -1,0 +1,186 @@
+//! Small vector types over a lane: [`Vec3`] for directions, [`Rgb`] for spectra.
+
+use super::lane::Lane;
+use std::ops::{Add, Mul, Neg, Sub};
+
+/// A 3-vector with one lane per component.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vec3<L> {
+    pub x: L,
+    pub y: L,
+    pub z: L,
+}
+
+impl<L: Lane> Vec3<L> {
+    #[inline(always)]
+    pub fn new(x: L, y: L, z: L) -> Self {
+        Self { x, y, z }
+    }
+    #[inline(always)]
+    pub fn splat(x: f32, y: f32, z: f32) -> Self {
+        Self::new(L::splat(x), L::splat(y), L::splat(z))
+    }
+    #[inline(always)]
+    pub fn dot(self, o: Self) -> L {
+        self.x.mul_add(o.x, self.y.mul_add(o.y, self.z * o.z))
+    }
+    #[inline(always)]
+    pub fn cross(self, o: Self) -> Self {
+        Self::new(
+            self.y * o.z - self.z * o.y,
+            self.z * o.x - self.x * o.z,
+            self.x * o.y - self.y * o.x,
+        )
+    }
+    #[inline(always)]
+    pub fn length_squared(self) -> L {
+        self.dot(self)
+    }
+    /// Unit vector; a zero vector stays zero instead of becoming NaN.
+    #[inline(always)]
+    pub fn normalize(self) -> Self {
+        let len = self.length_squared().sqrt();
+        let inv = L::one().safe_div(len);
+        self * inv
+    }
+    #[inline(always)]
+    pub fn select(mask: L::Mask, a: Self, b: Self) -> Self {
+        Self::new(
+            L::select(mask, a.x, b.x),
+            L::select(mask, a.y, b.y),
+            L::select(mask, a.z, b.z),
+        )
+    }
+    /// Mirror `self` about `n`: `2 (self.n) n - self` (both pointing away from the surface).
+    #[inline(always)]
+    pub fn reflect(self, n: Self) -> Self {
+        n * (L::splat(2.0) * self.dot(n)) - self
+    }
+}
+
+impl<L: Lane> Add for Vec3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl<L: Lane> Sub for Vec3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl<L: Lane> Mul<L> for Vec3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, s: L) -> Self {
+        Self::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+impl<L: Lane> Neg for Vec3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self::new(-self.x, -self.y, -self.z)
+    }
+}
+
+/// Linear RGB with one lane per channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rgb<L> {
+    pub r: L,
+    pub g: L,
+    pub b: L,
+}
+
+impl<L: Lane> Rgb<L> {
+    #[inline(always)]
+    pub fn new(r: L, g: L, b: L) -> Self {
+        Self { r, g, b }
+    }
+    #[inline(always)]
+    pub fn splat(v: L) -> Self {
+        Self::new(v, v, v)
+    }
+    #[inline(always)]
+    pub fn zero() -> Self {
+        Self::splat(L::zero())
+    }
+    #[inline(always)]
+    pub fn from_array(c: [L; 3]) -> Self {
+        Self::new(c[0], c[1], c[2])
+    }
+    /// Apply `f` to each channel.
+    #[inline(always)]
+    pub fn map(self, f: impl Fn(L) -> L) -> Self {
+        Self::new(f(self.r), f(self.g), f(self.b))
+    }
+    /// Combine two colors channel by channel.
+    #[inline(always)]
+    pub fn zip(self, o: Self, f: impl Fn(L, L) -> L) -> Self {
+        Self::new(f(self.r, o.r), f(self.g, o.g), f(self.b, o.b))
+    }
+    #[inline(always)]
+    pub fn select(mask: L::Mask, a: Self, b: Self) -> Self {
+        a.zip(b, |x, y| L::select(mask, x, y))
+    }
+    /// Rec. 709 luminance.
+    #[inline(always)]
+    pub fn luminance(self) -> L {
+        self.r * L::splat(0.2126) + self.g * L::splat(0.7152) + self.b * L::splat(0.0722)
+    }
+}
+
+impl<L: Lane> Add for Rgb<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        self.zip(o, |a, b| a + b)
+    }
+}
+impl<L: Lane> Mul for Rgb<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self.zip(o, |a, b| a * b)
+    }
+}
+impl<L: Lane> Mul<L> for Rgb<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, s: L) -> Self {
+        self.map(|a| a * s)
+    }
+}
+
+impl Rgb<f32> {
+    pub fn to_array(self) -> [f32; 3] {
+        [self.r, self.g, self.b]
+    }
+}
+
+impl Vec3<f32> {
+    /// A unit vector from user input: rejects NaN, infinities and vectors too short
+    /// to normalize reliably (length below 1e-12), naming `what` in the error.
+    pub fn try_unit(x: f32, y: f32, z: f32, what: &str) -> Result<Self, crate::error::Error> {
+        use crate::error::{Error, Status};
+        if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+            return Err(Error::new(
+                Status::InvalidArgument,
+                format!("{what} = ({x}, {y}, {z}) is not finite"),
+            ));
+        }
+        // Normalize in f64 so tiny but nonzero inputs do not underflow.
+        let (dx, dy, dz) = (f64::from(x), f64::from(y), f64::from(z));
+        let len = (dx * dx + dy * dy + dz * dz).sqrt();
+        if len < 1e-12 {
+            return Err(Error::new(
+                Status::InvalidArgument,
+                format!("{what} = ({x}, {y}, {z}) has zero length"),
+            ));
+        }
+        Ok(Vec3::new((dx / len) as f32, (dy / len) as f32, (dz / len) as f32))
+    }
+}

@@ -1,0 +1,214 @@
+//! Shared microfacet physics: the GGX (Trowbridge-Reitz) and Beckmann normal
+//! distributions, anisotropic, with Smith height-correlated masking-shadowing
+//! (Heitz 2014, "Understanding the Masking-Shadowing Function") and sampling of
+//! the distribution of visible normals (GGX: Heitz 2018; Beckmann: Heitz and
+//! d'Eon 2014, as in pbrt-v3). All directions are in the local frame (z = normal).
+
+use crate::math::special::{INV_SQRT_PI, erf, erf_inv, erfc_nonneg};
+use crate::math::{Lane, Mask, PI, Vec3};
+
+/// Smallest alpha a distribution is evaluated with.
+pub const MIN_ALPHA: f32 = 1e-4;
+/// Below this alpha (in both directions) a microfacet lobe is a delta lobe:
+/// it is sampled as a perfect specular interface, and eval and pdf return 0.
+/// With `alpha = roughness^2` this is `roughness < 0.0316`.
+pub const DELTA_ALPHA: f32 = 1e-3;
+
+/// Which normal distribution a lobe uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NdfKind {
+    Ggx,
+    Beckmann,
+}
+
+/// An anisotropic microfacet distribution with per-lane roughness.
+#[derive(Clone, Copy, Debug)]
+pub struct Distribution<L> {
+    pub kind: NdfKind,
+    pub alpha_x: L,
+    pub alpha_y: L,
+}
+
+impl<L: Lane> Distribution<L> {
+    /// From the artist parameters `roughness` and `anisotropic` in [0, 1]:
+    /// `alpha = roughness^2`, stretched along the tangent by `1 / sqrt(1 - 0.9 anisotropic)`
+    /// (Burley 2012's mapping).
+    pub fn from_roughness(kind: NdfKind, roughness: L, anisotropic: L) -> Self {
+        let alpha = roughness.clamp(L::zero(), L::one()).sqr();
+        let aspect = (L::one() - L::splat(0.9) * anisotropic.clamp(L::zero(), L::one())).sqrt();
+        let min = L::splat(MIN_ALPHA);
+        Self {
+            kind,
+            alpha_x: (alpha / aspect).max(min),
+            alpha_y: (alpha * aspect).max(min),
+        }
+    }
+
+    /// Lanes whose distribution is narrow enough to be treated as a delta.
+    #[inline(always)]
+    pub fn is_delta(&self) -> L::Mask {
+        self.alpha_x.max(self.alpha_y).lt(L::splat(DELTA_ALPHA))
+    }
+
+    /// The NDF `D(m)`, normalized so that the integral of `D(m) m.z` over the hemisphere is 1.
+    #[inline(always)]
+    pub fn d(&self, m: Vec3<L>) -> L {
+        let (ax, ay) = (self.alpha_x, self.alpha_y);
+        let sx = m.x / ax;
+        let sy = m.y / ay;
+        let z2 = m.z * m.z;
+        let above = m.z.gt(L::zero());
+        let value = match self.kind {
+            NdfKind::Ggx => {
+                let t = sx * sx + sy * sy + z2;
+                L::one().safe_div(L::splat(PI) * ax * ay * t * t)
+            }
+            NdfKind::Beckmann => {
+                let e = (sx * sx + sy * sy).safe_div(z2);
+                (-e).exp().safe_div(L::splat(PI) * ax * ay * z2 * z2)
+            }
+        };
+        L::select(above, value, L::zero())
+    }
+
+    /// Smith's `Lambda(w)` (Heitz 2014 eqs. 72 and 86), clamped to stay finite at grazing.
+    #[inline(always)]
+    pub fn lambda(&self, w: Vec3<L>) -> L {
+        let proj2 = (self.alpha_x * w.x).sqr() + (self.alpha_y * w.y).sqr();
+        let z2 = w.z * w.z;
+        let big = L::splat(1e30);
+        let value = match self.kind {
+            NdfKind::Ggx => {
+                // (sqrt(1 + x) - 1) / 2 == x / (2 (sqrt(1 + x) + 1)) with x = alpha^2 tan^2,
+                // the second form has no cancellation for near-normal directions.
+                let x = proj2.safe_div(z2);
+                x / (L::splat(2.0) * ((L::one() + x).sqrt() + L::one()))
+            }
+            NdfKind::Beckmann => {
+                // a = 1 / (alpha tan theta); Lambda = (exp(-a^2) / (a sqrt(pi)) - erfc(a)) / 2.
+                let a = w.z.abs().safe_div(proj2.sqrt());
+                let lam = L::splat(0.5) * ((-(a * a)).exp() * L::splat(INV_SQRT_PI) / a - erfc_nonneg(a));
+                // Lambda < 1e-9 past a = 4, where the two terms cancel in f32.
+                L::select(a.lt(L::splat(4.0)), lam.max(L::zero()), L::zero())
+            }
+        };
+        let grazing = z2.eq(L::zero()) & proj2.gt(L::zero());
+        L::select(grazing, big, value.min(big))
+    }
+
+    /// Smith masking `G1(w) = 1 / (1 + Lambda(w))`.
+    #[inline(always)]
+    pub fn g1(&self, w: Vec3<L>) -> L {
+        L::one() / (L::one() + self.lambda(w))
+    }
+
+    /// Height-correlated masking-shadowing `G2 = 1 / (1 + Lambda(wo) + Lambda(wi))` (Heitz 2014 eq. 99).
+    #[inline(always)]
+    pub fn g2(&self, wo: Vec3<L>, wi: Vec3<L>) -> L {
+        L::one() / (L::one() + self.lambda(wo) + self.lambda(wi))
+    }
+
+    /// Density of visible normals `D_w(m) = G1(w) |w.m| D(m) / |w.z|` (Heitz 2014 eq. 38).
+    #[inline(always)]
+    pub fn pdf_visible(&self, w: Vec3<L>, m: Vec3<L>) -> L {
+        (self.g1(w) * w.dot(m).abs() * self.d(m)).safe_div(w.z.abs())
+    }
+
+    /// Sample a visible normal for `w` (flipped to the upper hemisphere when below it).
+    #[inline(always)]
+    pub fn sample_visible(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
+        let w = Vec3::select(w.z.lt(L::zero()), -w, w);
+        match self.kind {
+            NdfKind::Ggx => self.sample_visible_ggx(w, u0, u1),
+            NdfKind::Beckmann => self.sample_visible_beckmann(w, u0, u1),
+        }
+    }
+
+    /// Heitz 2018, "Sampling the GGX Distribution of Visible Normals", listing 1.
+    fn sample_visible_ggx(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
+        let (ax, ay) = (self.alpha_x, self.alpha_y);
+        let vh = Vec3::new(ax * w.x, ay * w.y, w.z).normalize();
+        let len2 = vh.x * vh.x + vh.y * vh.y;
+        let inv_len = L::one().safe_div(len2.sqrt());
+        let has_len = len2.gt(L::zero());
+        let t1 = Vec3::new(
+            L::select(has_len, -vh.y * inv_len, L::one()),
+            L::select(has_len, vh.x * inv_len, L::zero()),
+            L::zero(),
+        );
+        let t2 = vh.cross(t1);
+        let r = u0.sqrt();
+        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
+        let p1 = r * cos_phi;
+        let s = L::splat(0.5) * (L::one() + vh.z);
+        let p2 = (L::one() - s) * (L::one() - p1 * p1).safe_sqrt() + s * r * sin_phi;
+        let nh = t1 * p1 + t2 * p2 + vh * (L::one() - p1 * p1 - p2 * p2).safe_sqrt();
+        Vec3::new(ax * nh.x, ay * nh.y, nh.z.max(L::splat(1e-6))).normalize()
+    }
+
+    /// Heitz and d'Eon 2014 ("Importance Sampling Microfacet-Based BSDFs using the
+    /// Distribution of Visible Normals"): stretch, sample the slope of the unit-roughness
+    /// distribution, rotate and unstretch.
+    fn sample_visible_beckmann(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
+        let (ax, ay) = (self.alpha_x, self.alpha_y);
+        let ws = Vec3::new(ax * w.x, ay * w.y, w.z).normalize();
+        let sin_theta = (ws.x * ws.x + ws.y * ws.y).sqrt();
+        let has_phi = sin_theta.gt(L::zero());
+        let cos_phi = L::select(has_phi, ws.x.safe_div(sin_theta), L::one());
+        let sin_phi = L::select(has_phi, ws.y.safe_div(sin_theta), L::zero());
+        let (sx, sy) = beckmann_sample_slopes(ws.z, u0, u1);
+        let rx = cos_phi * sx - sin_phi * sy;
+        let ry = sin_phi * sx + cos_phi * sy;
+        Vec3::new(-rx * ax, -ry * ay, L::one()).normalize()
+    }
+}
+
+/// Slopes of visible normals of the unit-roughness Beckmann distribution seen from
+/// `cos_theta` (pbrt-v3 `BeckmannSample11`: a fitted initial guess refined by a
+/// safeguarded Newton-bisection on the inverse CDF).
+fn beckmann_sample_slopes<L: Lane>(cos_theta: L, u0: L, u1: L) -> (L, L) {
+    let u0c = u0.clamp(L::splat(1e-6), L::splat(1.0 - 1e-7));
+    let u1c = u1.clamp(L::splat(1e-6), L::splat(1.0 - 1e-7));
+    // Normal incidence: the slope distribution is an isotropic Gaussian.
+    let r = (-(-u0c).ln_1p()).safe_sqrt();
+    let (sin_p, cos_p) = (L::splat(2.0 * PI) * u1c).sin_cos();
+    let normal = (r * cos_p, r * sin_p);
+
+    let cos_theta = cos_theta.clamp(L::splat(1e-6), L::one());
+    let sin_theta = (L::one() - cos_theta * cos_theta).safe_sqrt();
+    let tan_theta = sin_theta / cos_theta;
+    let cot_theta = cos_theta.safe_div(sin_theta);
+    let mut a = -L::one();
+    let mut c = erf(cot_theta);
+    let theta = cos_theta.acos();
+    let fit = L::one()
+        + theta * (L::splat(-0.876) + theta * (L::splat(0.4265) - L::splat(0.0594) * theta));
+    let mut b = c - (L::one() + c) * (fit * (-u0c).ln_1p()).exp();
+    let normalization = L::one()
+        / (L::one() + c + L::splat(INV_SQRT_PI) * tan_theta * (-(cot_theta * cot_theta)).exp());
+    let mut done = L::Mask::splat(false);
+    for _ in 0..10 {
+        let outside = b.lt(a) | b.gt(c);
+        b = L::select(outside, L::splat(0.5) * (a + c), b);
+        let inv_erf = erf_inv(b);
+        let value = normalization
+            * (L::one() + b + L::splat(INV_SQRT_PI) * tan_theta * (-(inv_erf * inv_erf)).exp())
+            - u0c;
+        let derivative = normalization * (L::one() - inv_erf * tan_theta);
+        done = done | value.abs().lt(L::splat(1e-5));
+        if done.all() {
+            break;
+        }
+        let positive = value.gt(L::zero());
+        c = L::select(positive & !done, b, c);
+        a = L::select(!positive & !done, b, a);
+        b = L::select(done, b, b - value.safe_div(derivative));
+    }
+    let slope_x = erf_inv(b);
+    let slope_y = erf_inv(L::splat(2.0) * u1c - L::one());
+    let at_normal = cos_theta.gt(L::splat(0.9999));
+    (
+        L::select(at_normal, normal.0, slope_x),
+        L::select(at_normal, normal.1, slope_y),
+    )
+}
