@@ -27,16 +27,23 @@ fn parse_error(message: String) -> Error {
 }
 
 /// Build (and finish) a closure from its JSON description.
-pub fn closure_from_json(registry: &Registry, text: &str, wo: Option<Vec3<f32>>) -> Result<Closure, Error> {
-    let root: Value = serde_json::from_str(text)
-        .map_err(|e| parse_error(format!("malformed JSON: {e}")))?;
-    let obj = root
-        .as_object()
-        .ok_or_else(|| parse_error("a closure description must be a JSON object with a \"lobes\" array".into()))?;
+pub fn closure_from_json(
+    registry: &Registry,
+    text: &str,
+    wo: Option<Vec3<f32>>,
+) -> Result<Closure, Error> {
+    let root: Value =
+        serde_json::from_str(text).map_err(|e| parse_error(format!("malformed JSON: {e}")))?;
+    let obj = root.as_object().ok_or_else(|| {
+        parse_error("a closure description must be a JSON object with a \"lobes\" array".into())
+    })?;
     if let Some(key) = obj.keys().find(|k| !TOP_KEYS.contains(&k.as_str())) {
         return Err(Error::new(
             Status::UnknownName,
-            format!("unknown key \"{key}\" in the closure; valid keys: {}", TOP_KEYS.join(", ")),
+            format!(
+                "unknown key \"{key}\" in the closure; valid keys: {}",
+                TOP_KEYS.join(", ")
+            ),
         ));
     }
     let mode = match obj.get("transport") {
@@ -46,7 +53,9 @@ pub fn closure_from_json(registry: &Registry, text: &str, wo: Option<Vec3<f32>>)
         Some(v) => {
             return Err(Error::new(
                 Status::UnknownName,
-                format!("\"transport\": {v} is not valid; valid choices: \"radiance\", \"importance\""),
+                format!(
+                    "\"transport\": {v} is not valid; valid choices: \"radiance\", \"importance\""
+                ),
             ));
         }
     };
@@ -65,11 +74,18 @@ pub fn closure_from_json(registry: &Registry, text: &str, wo: Option<Vec3<f32>>)
     Ok(closure)
 }
 
-fn add_lobe(registry: &Registry, closure: &mut Closure, lobe: &Map<String, Value>, i: usize) -> Result<(), Error> {
-    let name = lobe
-        .get("type")
-        .and_then(Value::as_str)
-        .ok_or_else(|| parse_error(format!("lobes[{i}] needs a \"type\" string; valid types: {}", registry.names().join(", "))))?;
+fn add_lobe(
+    registry: &Registry,
+    closure: &mut Closure,
+    lobe: &Map<String, Value>,
+    i: usize,
+) -> Result<(), Error> {
+    let name = lobe.get("type").and_then(Value::as_str).ok_or_else(|| {
+        parse_error(format!(
+            "lobes[{i}] needs a \"type\" string; valid types: {}",
+            registry.names().join(", ")
+        ))
+    })?;
     let type_id = registry.find(name)?;
     let lobe_type = registry.get(type_id)?;
     let specs = lobe_type.params();
@@ -83,7 +99,10 @@ fn add_lobe(registry: &Registry, closure: &mut Closure, lobe: &Map<String, Value
         None => Vec3::splat(0.0, 0.0, 1.0),
         Some(v) => vector(v, &at("normal"))?,
     };
-    let tangent = lobe.get("tangent").map(|v| vector(v, &at("tangent"))).transpose()?;
+    let tangent = lobe
+        .get("tangent")
+        .map(|v| vector(v, &at("tangent")))
+        .transpose()?;
 
     let mut block = vec![0.0f32; params::block_size(specs)];
     params::write_defaults(specs, &mut block);
@@ -92,10 +111,18 @@ fn add_lobe(registry: &Registry, closure: &mut Closure, lobe: &Map<String, Value
             continue;
         }
         let index = specs.iter().position(|s| s.name == key).ok_or_else(|| {
-            let valid: Vec<&str> = LOBE_KEYS.iter().copied().chain(specs.iter().map(|s| s.name)).collect();
+            let valid: Vec<&str> = LOBE_KEYS
+                .iter()
+                .copied()
+                .chain(specs.iter().map(|s| s.name))
+                .collect();
             Error::new(
                 Status::UnknownName,
-                format!("{}: unknown key; valid keys for {name}: {}", at(key), valid.join(", ")),
+                format!(
+                    "{}: unknown key; valid keys for {name}: {}",
+                    at(key),
+                    valid.join(", ")
+                ),
             )
         })?;
         let spec = &specs[index];
@@ -105,13 +132,23 @@ fn add_lobe(registry: &Registry, closure: &mut Closure, lobe: &Map<String, Value
             ParamKind::Rgb => block[offset..offset + 3].copy_from_slice(&rgb(value, &at(key))?),
             ParamKind::Enum(choices) => {
                 let choice = value.as_str().ok_or_else(|| {
-                    parse_error(format!("{}: expected one of {}", at(key), choices.join(", ")))
+                    parse_error(format!(
+                        "{}: expected one of {}",
+                        at(key),
+                        choices.join(", ")
+                    ))
                 })?;
                 block[offset] = spec.choice_index(name, choice)? as f32;
             }
         }
     }
-    closure.add_lobe(registry, type_id, weight, Frame::new(normal, tangent), Some(&block))?;
+    closure.add_lobe(
+        registry,
+        type_id,
+        weight,
+        Frame::new(normal, tangent),
+        Some(&block),
+    )?;
     Ok(())
 }
 
@@ -123,8 +160,14 @@ fn number(v: &Value, what: &str) -> Result<f32, Error> {
 
 fn triple(v: &Value, what: &str) -> Result<[f32; 3], Error> {
     match v.as_array() {
-        Some(a) if a.len() == 3 => Ok([number(&a[0], what)?, number(&a[1], what)?, number(&a[2], what)?]),
-        _ => Err(parse_error(format!("{what}: expected [x, y, z], found {v}"))),
+        Some(a) if a.len() == 3 => Ok([
+            number(&a[0], what)?,
+            number(&a[1], what)?,
+            number(&a[2], what)?,
+        ]),
+        _ => Err(parse_error(format!(
+            "{what}: expected [x, y, z], found {v}"
+        ))),
     }
 }
 

@@ -39,7 +39,13 @@ pub struct ParamSpec {
 }
 
 impl ParamSpec {
-    pub const fn float(name: &'static str, default: f32, min: f32, max: f32, doc: &'static str) -> Self {
+    pub const fn float(
+        name: &'static str,
+        default: f32,
+        min: f32,
+        max: f32,
+        doc: &'static str,
+    ) -> Self {
         ParamSpec {
             name,
             kind: ParamKind::Float,
@@ -49,7 +55,13 @@ impl ParamSpec {
             doc,
         }
     }
-    pub const fn rgb(name: &'static str, default: [f32; 3], min: f32, max: f32, doc: &'static str) -> Self {
+    pub const fn rgb(
+        name: &'static str,
+        default: [f32; 3],
+        min: f32,
+        max: f32,
+        doc: &'static str,
+    ) -> Self {
         ParamSpec {
             name,
             kind: ParamKind::Rgb,
@@ -132,7 +144,10 @@ pub fn validate(lobe: &str, specs: &[ParamSpec], block: &[f32]) -> Result<(), Er
     if block.len() != expected {
         return Err(Error::new(
             Status::InvalidArgument,
-            format!("{lobe}: parameter block has {} values, expected {expected}", block.len()),
+            format!(
+                "{lobe}: parameter block has {} values, expected {expected}",
+                block.len()
+            ),
         ));
     }
     let mut offset = 0;

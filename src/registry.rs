@@ -35,7 +35,10 @@ impl Registry {
         if self.find(lobe.name()).is_ok() {
             return Err(Error::new(
                 Status::InvalidArgument,
-                format!("a lobe type named \"{}\" is already registered", lobe.name()),
+                format!(
+                    "a lobe type named \"{}\" is already registered",
+                    lobe.name()
+                ),
             ));
         }
         self.types.push(lobe);
@@ -55,7 +58,10 @@ impl Registry {
         self.types.get(id as usize).copied().ok_or_else(|| {
             Error::new(
                 Status::OutOfRange,
-                format!("lobe type id {id} does not exist (the registry has {})", self.len()),
+                format!(
+                    "lobe type id {id} does not exist (the registry has {})",
+                    self.len()
+                ),
             )
         })
     }
@@ -69,7 +75,10 @@ impl Registry {
             .ok_or_else(|| {
                 Error::new(
                     Status::UnknownName,
-                    format!("unknown lobe type \"{name}\"; valid types: {}", self.names().join(", ")),
+                    format!(
+                        "unknown lobe type \"{name}\"; valid types: {}",
+                        self.names().join(", ")
+                    ),
                 )
             })
     }

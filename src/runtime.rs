@@ -32,11 +32,17 @@ impl Settings {
     /// Unknown keys and bad values are errors that name the valid ones.
     pub fn parse(config: &str) -> Result<Settings, Error> {
         let mut settings = Settings::default();
-        for item in config.split([' ', '\t', '\n', ',', ';']).filter(|s| !s.is_empty()) {
+        for item in config
+            .split([' ', '\t', '\n', ',', ';'])
+            .filter(|s| !s.is_empty())
+        {
             let (key, value) = item.split_once('=').ok_or_else(|| {
                 Error::new(
                     Status::Parse,
-                    format!("config item \"{item}\" is not key=value; valid keys: {}", CONFIG_KEYS.join(", ")),
+                    format!(
+                        "config item \"{item}\" is not key=value; valid keys: {}",
+                        CONFIG_KEYS.join(", ")
+                    ),
                 )
             })?;
             match key {
@@ -47,7 +53,9 @@ impl Settings {
                         "avx2" | "avx512" => {
                             return Err(Error::new(
                                 Status::Unsupported,
-                                format!("isa={value}: this build has only the scalar kernels; valid: auto, scalar"),
+                                format!(
+                                    "isa={value}: this build has only the scalar kernels; valid: auto, scalar"
+                                ),
                             ));
                         }
                         _ => {
@@ -61,7 +69,10 @@ impl Settings {
                 _ => {
                     return Err(Error::new(
                         Status::UnknownName,
-                        format!("unknown config key \"{key}\"; valid keys: {}", CONFIG_KEYS.join(", ")),
+                        format!(
+                            "unknown config key \"{key}\"; valid keys: {}",
+                            CONFIG_KEYS.join(", ")
+                        ),
                     ));
                 }
             }

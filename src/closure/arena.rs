@@ -14,7 +14,10 @@ impl<T> Arena<T> {
     /// An arena with room for `capacity` closures.
     pub fn new(capacity: usize) -> Result<Self, Error> {
         if capacity == 0 {
-            return Err(Error::new(Status::InvalidArgument, "arena capacity must be at least 1 closure"));
+            return Err(Error::new(
+                Status::InvalidArgument,
+                "arena capacity must be at least 1 closure",
+            ));
         }
         let mut slots = Vec::new();
         slots.try_reserve_exact(capacity).map_err(|_| {

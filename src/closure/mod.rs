@@ -141,7 +141,11 @@ impl Closure {
         if let Some(i) = weight.iter().position(|w| !w.is_finite() || *w < 0.0) {
             return Err(Error::new(
                 Status::InvalidArgument,
-                format!("{}: weight[{i}] = {} must be finite and >= 0", lobe.name(), weight[i]),
+                format!(
+                    "{}: weight[{i}] = {} must be finite and >= 0",
+                    lobe.name(),
+                    weight[i]
+                ),
             ));
         }
         let specs = lobe.params();
@@ -177,11 +181,16 @@ impl Closure {
     /// Fix the lobe selection probabilities; the closure is immutable afterwards.
     pub fn finish(&mut self) -> Result<(), Error> {
         if self.finished {
-            return Err(Error::new(Status::InvalidState, "the closure is already finished"));
+            return Err(Error::new(
+                Status::InvalidState,
+                "the closure is already finished",
+            ));
         }
         let mut shares = [0.0f32; MAX_LOBES];
         for (k, l) in self.lobes().iter().enumerate() {
-            let wo = self.wo.map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
+            let wo = self
+                .wo
+                .map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
             let albedo = l.lobe.albedo(self.lobe_params(k), wo, self.mode);
             shares[k] = (l.weight * albedo).luminance().max(0.0);
         }
@@ -219,7 +228,10 @@ impl Closure {
         self.lobes().get(index).ok_or_else(|| {
             Error::new(
                 Status::OutOfRange,
-                format!("lobe index {index} is out of range: the closure has {} lobes", self.lobe_count),
+                format!(
+                    "lobe index {index} is out of range: the closure has {} lobes",
+                    self.lobe_count
+                ),
             )
         })
     }
@@ -271,14 +283,21 @@ impl Closure {
     /// Directional albedo: the sum of each lobe's `weight * albedo(wo)`.
     pub fn albedo(&self, wo: Vec3<f32>) -> Result<Rgb<f32>, Error> {
         self.check_finished()?;
-        Ok(self.lobes().iter().enumerate().fold(Rgb::zero(), |acc, (k, l)| {
-            acc + l.weight * l.lobe.albedo(self.lobe_params(k), l.frame.to_local(wo), self.mode)
-        }))
+        Ok(self
+            .lobes()
+            .iter()
+            .enumerate()
+            .fold(Rgb::zero(), |acc, (k, l)| {
+                acc + l.weight
+                    * l.lobe
+                        .albedo(self.lobe_params(k), l.frame.to_local(wo), self.mode)
+            }))
     }
 
     /// Sample the closure: choose a lobe with `u[0]`, then a direction with the rest.
     pub fn sample(&self, wo: Vec3<f32>, u: [f32; 3]) -> Result<SampleResult, Error> {
         self.check_finished()?;
+        check_randoms(u)?;
         let u_lobe = u[0].clamp(0.0, ONE_MINUS_EPSILON);
         let mut start = 0.0;
         let mut chosen = self.lobe_count;
@@ -291,7 +310,11 @@ impl Closure {
         }
         if chosen == self.lobe_count {
             // Round-off left u_lobe past the last bin: take the last lobe that can be chosen.
-            chosen = self.lobes().iter().rposition(|l| l.probability > 0.0).ok_or_else(no_sample)?;
+            chosen = self
+                .lobes()
+                .iter()
+                .rposition(|l| l.probability > 0.0)
+                .ok_or_else(no_sample)?;
             start = 1.0 - self.lobes[chosen].probability;
         }
         let probability = self.lobes[chosen].probability;
@@ -300,8 +323,14 @@ impl Closure {
     }
 
     /// Sample lobe `index` alone: value is `weight * f |cos|`, pdf that lobe's own.
-    pub fn sample_lobe(&self, index: usize, wo: Vec3<f32>, u: [f32; 3]) -> Result<SampleResult, Error> {
+    pub fn sample_lobe(
+        &self,
+        index: usize,
+        wo: Vec3<f32>,
+        u: [f32; 3],
+    ) -> Result<SampleResult, Error> {
         self.check_lobe(index)?;
+        check_randoms(u)?;
         self.sample_from(index, wo, u, None)
     }
 
@@ -315,7 +344,9 @@ impl Closure {
         mixture: Option<f32>,
     ) -> Result<SampleResult, Error> {
         let l = &self.lobes[k];
-        let s = l.lobe.sample(self.lobe_params(k), l.frame.to_local(wo), u, self.mode);
+        let s = l
+            .lobe
+            .sample(self.lobe_params(k), l.frame.to_local(wo), u, self.mode);
         if !s.valid {
             return Err(no_sample());
         }
@@ -352,7 +383,12 @@ impl Closure {
     }
 
     /// Lobe `index` alone at `(wo, wi)`: `weight * f |cos|`, its own pdf and reverse pdf.
-    pub fn eval_lobe(&self, index: usize, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<EvalResult, Error> {
+    pub fn eval_lobe(
+        &self,
+        index: usize,
+        wo: Vec3<f32>,
+        wi: Vec3<f32>,
+    ) -> Result<EvalResult, Error> {
         self.check_lobe(index)?;
         let (value, pdf) = self.eval_one(index, wo, wi);
         Ok(EvalResult {
@@ -371,13 +407,29 @@ impl Closure {
     /// `weight * albedo(wo)` of lobe `index`.
     pub fn albedo_lobe(&self, index: usize, wo: Vec3<f32>) -> Result<Rgb<f32>, Error> {
         let l = self.check_lobe(index)?;
-        Ok(l.weight * l.lobe.albedo(self.lobe_params(index), l.frame.to_local(wo), self.mode))
+        Ok(l.weight
+            * l.lobe
+                .albedo(self.lobe_params(index), l.frame.to_local(wo), self.mode))
     }
 }
 
 /// The largest `f32` below 1, so that `u < 1` for every sample dimension.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
+/// Random numbers must be finite (they are clamped into [0, 1)).
+fn check_randoms(u: [f32; 3]) -> Result<(), Error> {
+    match u.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(Error::new(
+            Status::InvalidArgument,
+            format!("random number {i} ({}) is not finite", u[i]),
+        )),
+        None => Ok(()),
+    }
+}
+
 fn no_sample() -> Error {
-    Error::new(Status::NoSample, "no sample: the closure cannot scatter from this direction")
+    Error::new(
+        Status::NoSample,
+        "no sample: the closure cannot scatter from this direction",
+    )
 }

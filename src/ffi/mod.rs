@@ -1,1 +1,242 @@
+//! The C ABI: the only place with `extern "C"`, raw pointers and `catch_unwind`.
+//! `include/glint.h` is generated from these files by cbindgen (see `tests/header.rs`).
+//!
+//! Rules (DESIGN.md, "C ABI rules"): every function that can fail returns a
+//! `glint_status` and leaves a per-thread message for `glint_last_error()`; every
+//! body runs inside a panic boundary; structs that may grow begin with `struct_size`.
 
+#![allow(non_camel_case_types)]
+
+mod batch;
+mod closure;
+mod runtime;
+
+pub use batch::*;
+pub use closure::*;
+pub use runtime::*;
+
+use crate::error::{Error, Status};
+use std::cell::RefCell;
+use std::ffi::{CStr, CString, c_char};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+/// A status code: 0 (`GLINT_OK`) on success.
+pub type glint_status = u32;
+
+pub const GLINT_OK: glint_status = 0;
+pub const GLINT_ERROR_NULL_POINTER: glint_status = 1;
+pub const GLINT_ERROR_INVALID_ARGUMENT: glint_status = 2;
+pub const GLINT_ERROR_OUT_OF_RANGE: glint_status = 3;
+pub const GLINT_ERROR_UNKNOWN_NAME: glint_status = 4;
+pub const GLINT_ERROR_PARSE: glint_status = 5;
+pub const GLINT_ERROR_STRUCT_SIZE: glint_status = 6;
+pub const GLINT_ERROR_ARENA_FULL: glint_status = 7;
+pub const GLINT_ERROR_CLOSURE_FULL: glint_status = 8;
+pub const GLINT_ERROR_INVALID_STATE: glint_status = 9;
+pub const GLINT_ERROR_UNSUPPORTED: glint_status = 10;
+/// Not an error: the closure cannot scatter from this direction (the result is
+/// zeroed and `glint_last_error` is left unchanged).
+pub const GLINT_NO_SAMPLE: glint_status = 11;
+pub const GLINT_ERROR_PANIC: glint_status = 12;
+
+pub const GLINT_VERSION_MAJOR: u32 = 0;
+pub const GLINT_VERSION_MINOR: u32 = 1;
+pub const GLINT_VERSION_PATCH: u32 = 0;
+
+/// Most lobes in one closure.
+pub const GLINT_MAX_LOBES: u32 = 16;
+
+/// Sample and lobe-type flags.
+pub const GLINT_FLAG_REFLECTION: u32 = 1;
+pub const GLINT_FLAG_TRANSMISSION: u32 = 2;
+pub const GLINT_FLAG_DIFFUSE: u32 = 4;
+pub const GLINT_FLAG_GLOSSY: u32 = 8;
+pub const GLINT_FLAG_SPECULAR: u32 = 16;
+
+/// `glint_closure_begin` flag: the closure transports importance (adjoint), not radiance.
+pub const GLINT_CLOSURE_IMPORTANCE: u32 = 1;
+
+/// Parameter types of `glint_param_info.type`.
+pub const GLINT_PARAM_FLOAT: u32 = 0;
+pub const GLINT_PARAM_RGB: u32 = 1;
+pub const GLINT_PARAM_ENUM: u32 = 2;
+
+/// A 3-vector (world-space direction or normal).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct glint_vec3 {
+    pub x: f32,
+    pub y: f32,
+    pub z: f32,
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn set_last_error(message: &str) {
+    // A message with an interior NUL is cut there rather than lost.
+    let bytes: Vec<u8> = message.bytes().take_while(|b| *b != 0).collect();
+    let c = CString::new(bytes).unwrap_or_default();
+    LAST_ERROR.with(|e| *e.borrow_mut() = c);
+}
+
+/// Run an API body inside the panic boundary and turn its result into a status.
+fn guard(body: impl FnOnce() -> Result<(), Error>) -> glint_status {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(())) => GLINT_OK,
+        Ok(Err(e)) => {
+            if e.status != Status::NoSample {
+                set_last_error(&e.message);
+            }
+            e.status as glint_status
+        }
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            set_last_error(&format!("internal error: {what}"));
+            GLINT_ERROR_PANIC
+        }
+    }
+}
+
+fn null(what: &str) -> Error {
+    Error::new(Status::NullPointer, format!("{what} is NULL"))
+}
+
+/// `&T` from a pointer the caller promises is NULL or valid.
+///
+/// # Safety
+/// `p` is NULL or points to a live `T` for `'a`.
+unsafe fn deref<'a, T>(p: *const T, what: &str) -> Result<&'a T, Error> {
+    // SAFETY: the caller guarantees `p` is NULL or valid; NULL is checked by `as_ref`.
+    unsafe { p.as_ref() }.ok_or_else(|| null(what))
+}
+
+/// `&mut T` from a pointer the caller promises is NULL or valid and unaliased.
+///
+/// # Safety
+/// `p` is NULL or points to a live `T` not accessed elsewhere for `'a`.
+unsafe fn deref_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Error> {
+    // SAFETY: the caller guarantees `p` is NULL or valid and unaliased.
+    unsafe { p.as_mut() }.ok_or_else(|| null(what))
+}
+
+/// A NUL-terminated UTF-8 string argument.
+///
+/// # Safety
+/// `p` is NULL or points to a NUL-terminated string that lives for `'a`.
+unsafe fn c_str<'a>(p: *const c_char, what: &str) -> Result<&'a str, Error> {
+    if p.is_null() {
+        return Err(null(what));
+    }
+    // SAFETY: non-NULL and NUL-terminated per the caller's contract.
+    unsafe { CStr::from_ptr(p) }.to_str().map_err(|_| {
+        Error::new(
+            Status::InvalidArgument,
+            format!("{what} is not valid UTF-8"),
+        )
+    })
+}
+
+/// Structs that begin with `struct_size`.
+trait Sized32 {
+    fn struct_size(&self) -> u32;
+}
+
+/// Check that a caller's struct is at least as large as this library's version of it.
+fn check_size<T: Sized32>(s: &T, what: &str) -> Result<(), Error> {
+    let need = std::mem::size_of::<T>();
+    if (s.struct_size() as usize) < need {
+        return Err(Error::new(
+            Status::StructSize,
+            format!(
+                "{what}.struct_size is {} but this library needs {need}",
+                s.struct_size()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Output pointer to a struct that begins with `struct_size`, checked.
+///
+/// # Safety
+/// As [`deref_mut`].
+unsafe fn out_struct<'a, T: Sized32>(p: *mut T, what: &str) -> Result<&'a mut T, Error> {
+    // SAFETY: forwarded contract.
+    let s = unsafe { deref_mut(p, what) }?;
+    check_size(s, what)?;
+    Ok(s)
+}
+
+/// Write `value` through an output pointer.
+///
+/// # Safety
+/// `p` is NULL or valid for writes.
+unsafe fn write_out<T>(p: *mut T, what: &str, value: T) -> Result<(), Error> {
+    // SAFETY: forwarded contract.
+    *unsafe { deref_mut(p, what) }? = value;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn status_constants_match_the_rust_statuses() {
+        let c = [
+            GLINT_OK,
+            GLINT_ERROR_NULL_POINTER,
+            GLINT_ERROR_INVALID_ARGUMENT,
+            GLINT_ERROR_OUT_OF_RANGE,
+            GLINT_ERROR_UNKNOWN_NAME,
+            GLINT_ERROR_PARSE,
+            GLINT_ERROR_STRUCT_SIZE,
+            GLINT_ERROR_ARENA_FULL,
+            GLINT_ERROR_CLOSURE_FULL,
+            GLINT_ERROR_INVALID_STATE,
+            GLINT_ERROR_UNSUPPORTED,
+            GLINT_NO_SAMPLE,
+            GLINT_ERROR_PANIC,
+        ];
+        for (s, c) in Status::ALL.iter().zip(c) {
+            assert_eq!(*s as u32, c, "{s:?}");
+        }
+        use crate::lobes::flags;
+        assert_eq!(
+            [
+                flags::REFLECTION,
+                flags::TRANSMISSION,
+                flags::DIFFUSE,
+                flags::GLOSSY,
+                flags::SPECULAR
+            ],
+            [
+                GLINT_FLAG_REFLECTION,
+                GLINT_FLAG_TRANSMISSION,
+                GLINT_FLAG_DIFFUSE,
+                GLINT_FLAG_GLOSSY,
+                GLINT_FLAG_SPECULAR
+            ]
+        );
+        assert_eq!(GLINT_MAX_LOBES as usize, crate::closure::MAX_LOBES);
+        let v = env!("CARGO_PKG_VERSION");
+        assert_eq!(
+            v,
+            format!("{GLINT_VERSION_MAJOR}.{GLINT_VERSION_MINOR}.{GLINT_VERSION_PATCH}")
+        );
+    }
+
+    #[test]
+    fn a_panic_becomes_a_status_and_a_message() {
+        let status = guard(|| panic!("boom"));
+        assert_eq!(status, GLINT_ERROR_PANIC);
+        let msg = LAST_ERROR.with(|e| e.borrow().to_str().unwrap().to_string());
+        assert!(msg.contains("boom"), "{msg}");
+    }
+}

@@ -30,7 +30,11 @@ pub struct Conductor;
 pub const DISTRIBUTION_CHOICES: &[&str] = &["ggx", "beckmann"];
 
 pub(crate) fn ndf_kind(choice: usize) -> NdfKind {
-    if choice == 1 { NdfKind::Beckmann } else { NdfKind::Ggx }
+    if choice == 1 {
+        NdfKind::Beckmann
+    } else {
+        NdfKind::Ggx
+    }
 }
 
 const DISTRIBUTION: usize = offset_of(Conductor::PARAMS, 0);

@@ -110,13 +110,35 @@ impl Model for Dielectric {
     const SUMMARY: &'static str =
         "Rough dielectric interface (Walter 2007): reflection and refraction, delta when smooth";
     const PARAMS: &'static [ParamSpec] = &[
-        ParamSpec::choice("distribution", DISTRIBUTION_CHOICES, 0, "microfacet normal distribution"),
-        ParamSpec::float("roughness", 0.1, 0.0, 1.0, "alpha = roughness^2; below 0.0316 smooth (delta)"),
-        ParamSpec::float("anisotropic", 0.0, 0.0, 1.0, "stretch along the tangent (Burley 2012 mapping)"),
-        ParamSpec::float("eta", 1.5, 0.001, 1000.0, "relative IOR, inside over outside"),
+        ParamSpec::choice(
+            "distribution",
+            DISTRIBUTION_CHOICES,
+            0,
+            "microfacet normal distribution",
+        ),
+        ParamSpec::float(
+            "roughness",
+            0.1,
+            0.0,
+            1.0,
+            "alpha = roughness^2; below 0.0316 smooth (delta)",
+        ),
+        ParamSpec::float(
+            "anisotropic",
+            0.0,
+            0.0,
+            1.0,
+            "stretch along the tangent (Burley 2012 mapping)",
+        ),
+        ParamSpec::float(
+            "eta",
+            1.5,
+            0.001,
+            1000.0,
+            "relative IOR, inside over outside",
+        ),
     ];
-    const FLAGS: u32 =
-        flags::REFLECTION | flags::TRANSMISSION | flags::GLOSSY | flags::SPECULAR;
+    const FLAGS: u32 = flags::REFLECTION | flags::TRANSMISSION | flags::GLOSSY | flags::SPECULAR;
     const RECIPROCAL: bool = false;
 
     type Prepared<L: Lane> = Prepared<L>;

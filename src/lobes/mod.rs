@@ -160,13 +160,7 @@ pub trait LobeType: Send + Sync {
     fn flags(&self) -> u32;
     fn reciprocal(&self) -> bool;
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32>;
-    fn sample(
-        &self,
-        params: &[f32],
-        wo: Vec3<f32>,
-        u: [f32; 3],
-        mode: Transport,
-    ) -> Sample<f32>;
+    fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32>;
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32>;
 }
 
@@ -204,13 +198,7 @@ impl<M: Model> LobeType for Builtin<M> {
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         M::eval(&M::prepare(Params::new(params)), wo, wi, mode)
     }
-    fn sample(
-        &self,
-        params: &[f32],
-        wo: Vec3<f32>,
-        u: [f32; 3],
-        mode: Transport,
-    ) -> Sample<f32> {
+    fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32> {
         M::sample(&M::prepare(Params::new(params)), wo, u[0], u[1], u[2], mode).finish()
     }
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
@@ -237,4 +225,3 @@ pub fn no_sample<L: Lane>() -> Sample<L> {
         roughness: L::zero(),
     }
 }
-

@@ -14,9 +14,21 @@ pub struct Frame {
 impl Frame {
     /// The frame whose local axes equal the world axes.
     pub const IDENTITY: Frame = Frame {
-        t: Vec3 { x: 1.0, y: 0.0, z: 0.0 },
-        b: Vec3 { x: 0.0, y: 1.0, z: 0.0 },
-        n: Vec3 { x: 0.0, y: 0.0, z: 1.0 },
+        t: Vec3 {
+            x: 1.0,
+            y: 0.0,
+            z: 0.0,
+        },
+        b: Vec3 {
+            x: 0.0,
+            y: 1.0,
+            z: 0.0,
+        },
+        n: Vec3 {
+            x: 0.0,
+            y: 0.0,
+            z: 1.0,
+        },
     };
 
     /// Build a frame from a unit normal and an optional tangent hint. The tangent is
@@ -28,7 +40,11 @@ impl Frame {
             .filter(|t| t.length_squared() > 1e-12)
             .map(Vec3::normalize)
             .unwrap_or_else(|| Self::duff_tangent(n));
-        Frame { t, b: n.cross(t), n }
+        Frame {
+            t,
+            b: n.cross(t),
+            n,
+        }
     }
 
     fn duff_tangent(n: Vec3<f32>) -> Vec3<f32> {

@@ -90,7 +90,11 @@ pub trait Lane:
     #[inline(always)]
     fn safe_div(self, d: Self) -> Self {
         let nonzero = d.abs().gt(Self::zero());
-        Self::select(nonzero, self / Self::select(nonzero, d, Self::one()), Self::zero())
+        Self::select(
+            nonzero,
+            self / Self::select(nonzero, d, Self::one()),
+            Self::zero(),
+        )
     }
 }
 

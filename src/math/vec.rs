@@ -181,6 +181,10 @@ impl Vec3<f32> {
                 format!("{what} = ({x}, {y}, {z}) has zero length"),
             ));
         }
-        Ok(Vec3::new((dx / len) as f32, (dy / len) as f32, (dz / len) as f32))
+        Ok(Vec3::new(
+            (dx / len) as f32,
+            (dy / len) as f32,
+            (dz / len) as f32,
+        ))
     }
 }

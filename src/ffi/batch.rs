@@ -1,0 +1,327 @@
+//! Batch entry points over SoA arrays. Each argument struct begins with
+//! `struct_size`; lanes take either one closure (`closure`) or one per lane
+//! (`closures`, used when non-NULL); `active` (optional) skips lanes whose byte is 0,
+//! leaving their outputs untouched.
+
+use super::*;
+use crate::batch::{self, BatchInput, EvalOutput, SampleOutput, SampleRandoms, Soa3, Soa3Mut};
+use crate::closure::Closure;
+
+/// Arguments of `glint_eval_batch`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_eval_batch_args {
+    /// Set by the caller to `sizeof(glint_eval_batch_args)`.
+    pub struct_size: u32,
+    pub count: usize,
+    /// The closure of every lane, used when `closures` is NULL.
+    pub closure: *const glint_closure,
+    /// One closure per lane (`count` entries), or NULL.
+    pub closures: *const *const glint_closure,
+    /// Optional: `count` bytes, 0 = skip the lane.
+    pub active: *const u8,
+    pub wo_x: *const f32,
+    pub wo_y: *const f32,
+    pub wo_z: *const f32,
+    pub wi_x: *const f32,
+    pub wi_y: *const f32,
+    pub wi_z: *const f32,
+    pub value_r: *mut f32,
+    pub value_g: *mut f32,
+    pub value_b: *mut f32,
+    pub pdf: *mut f32,
+    /// Optional.
+    pub pdf_reverse: *mut f32,
+}
+
+/// Arguments of `glint_pdf_batch`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_pdf_batch_args {
+    /// Set by the caller to `sizeof(glint_pdf_batch_args)`.
+    pub struct_size: u32,
+    pub count: usize,
+    pub closure: *const glint_closure,
+    pub closures: *const *const glint_closure,
+    pub active: *const u8,
+    pub wo_x: *const f32,
+    pub wo_y: *const f32,
+    pub wo_z: *const f32,
+    pub wi_x: *const f32,
+    pub wi_y: *const f32,
+    pub wi_z: *const f32,
+    pub pdf: *mut f32,
+}
+
+/// Arguments of `glint_sample_batch`. Lanes that cannot scatter get `pdf = 0`,
+/// zero `wi` and weight, and `flags = 0`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_sample_batch_args {
+    /// Set by the caller to `sizeof(glint_sample_batch_args)`.
+    pub struct_size: u32,
+    pub count: usize,
+    pub closure: *const glint_closure,
+    pub closures: *const *const glint_closure,
+    pub active: *const u8,
+    pub wo_x: *const f32,
+    pub wo_y: *const f32,
+    pub wo_z: *const f32,
+    pub u_lobe: *const f32,
+    pub u0: *const f32,
+    pub u1: *const f32,
+    pub wi_x: *mut f32,
+    pub wi_y: *mut f32,
+    pub wi_z: *mut f32,
+    pub pdf: *mut f32,
+    pub weight_r: *mut f32,
+    pub weight_g: *mut f32,
+    pub weight_b: *mut f32,
+    /// Optional outputs (NULL = not written).
+    pub value_r: *mut f32,
+    pub value_g: *mut f32,
+    pub value_b: *mut f32,
+    pub flags: *mut u32,
+    pub lobe: *mut u32,
+    pub eta: *mut f32,
+    pub roughness: *mut f32,
+}
+
+macro_rules! sized {
+    ($($t:ty),*) => {$(
+        impl Sized32 for $t {
+            fn struct_size(&self) -> u32 {
+                self.struct_size
+            }
+        }
+    )*};
+}
+sized!(
+    glint_eval_batch_args,
+    glint_pdf_batch_args,
+    glint_sample_batch_args
+);
+
+/// `count` elements at `p`, which must not be NULL.
+///
+/// # Safety
+/// `p` is NULL or valid for `count` reads.
+unsafe fn input<'a, T>(p: *const T, count: usize, what: &str) -> Result<&'a [T], Error> {
+    if p.is_null() {
+        return Err(null(what));
+    }
+    // SAFETY: non-NULL and valid for `count` elements per the contract.
+    Ok(unsafe { std::slice::from_raw_parts(p, count) })
+}
+
+/// `count` writable elements at `p`, which must not be NULL.
+///
+/// # Safety
+/// `p` is NULL or valid for `count` writes and not aliased by another output.
+unsafe fn output<'a, T>(p: *mut T, count: usize, what: &str) -> Result<&'a mut [T], Error> {
+    if p.is_null() {
+        return Err(null(what));
+    }
+    // SAFETY: non-NULL, valid for `count` elements and unaliased per the contract.
+    Ok(unsafe { std::slice::from_raw_parts_mut(p, count) })
+}
+
+/// Like [`output`], but NULL means "not requested".
+///
+/// # Safety
+/// As [`output`].
+unsafe fn optional<'a, T>(p: *mut T, count: usize) -> Option<&'a mut [T]> {
+    // SAFETY: forwarded contract.
+    (!p.is_null()).then(|| unsafe { std::slice::from_raw_parts_mut(p, count) })
+}
+
+/// Per-lane closures from C handles.
+struct CClosures<'a>(&'a [*const glint_closure]);
+
+impl<'a> batch::ClosureSource<'a> for CClosures<'a> {
+    fn closure(&self, lane: usize) -> Result<&'a Closure, Error> {
+        // SAFETY: the caller passes NULL or live handles (documented contract).
+        Ok(&unsafe { deref(self.0[lane], "closures[lane]") }?.closure)
+    }
+}
+
+/// Which closures the lanes use.
+enum Lanes<'a> {
+    One(&'a Closure),
+    PerLane(CClosures<'a>),
+}
+
+/// # Safety
+/// Pointers as documented on the argument structs.
+unsafe fn lanes<'a>(
+    closure: *const glint_closure,
+    closures: *const *const glint_closure,
+    count: usize,
+) -> Result<Lanes<'a>, Error> {
+    if closures.is_null() {
+        // SAFETY: per the contract.
+        Ok(Lanes::One(
+            &unsafe { deref(closure, "closure (and closures is NULL)") }?.closure,
+        ))
+    } else {
+        // SAFETY: per the contract.
+        Ok(Lanes::PerLane(CClosures(unsafe {
+            input(closures, count, "closures")
+        }?)))
+    }
+}
+
+/// # Safety
+/// `x`, `y`, `z` are NULL or valid for `count` reads.
+unsafe fn soa_in<'a>(
+    x: *const f32,
+    y: *const f32,
+    z: *const f32,
+    count: usize,
+    what: &str,
+) -> Result<Soa3<'a>, Error> {
+    // SAFETY: per the contract.
+    unsafe {
+        Ok(Soa3 {
+            x: input(x, count, &format!("{what}_x"))?,
+            y: input(y, count, &format!("{what}_y"))?,
+            z: input(z, count, &format!("{what}_z"))?,
+        })
+    }
+}
+
+/// # Safety
+/// `x`, `y`, `z` are NULL or valid for `count` writes and unaliased.
+unsafe fn soa_out<'a>(
+    x: *mut f32,
+    y: *mut f32,
+    z: *mut f32,
+    count: usize,
+    what: &str,
+) -> Result<Soa3Mut<'a>, Error> {
+    // SAFETY: per the contract.
+    unsafe {
+        Ok(Soa3Mut {
+            x: output(x, count, &format!("{what} (x/r)"))?,
+            y: output(y, count, &format!("{what} (y/g)"))?,
+            z: output(z, count, &format!("{what} (z/b)"))?,
+        })
+    }
+}
+
+/// Run `f` with the batch input for whichever closure source the lanes use.
+macro_rules! with_input {
+    ($lanes:expr, $count:expr, $active:expr, $wo:expr, |$input:ident| $body:expr) => {
+        match $lanes {
+            Lanes::One(c) => {
+                let $input = BatchInput {
+                    count: $count,
+                    closures: c,
+                    active: $active,
+                    wo: $wo,
+                };
+                $body
+            }
+            Lanes::PerLane(c) => {
+                let $input = BatchInput {
+                    count: $count,
+                    closures: c,
+                    active: $active,
+                    wo: $wo,
+                };
+                $body
+            }
+        }
+    };
+}
+
+/// `glint_eval` over SoA arrays.
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_eval_batch(args: *const glint_eval_batch_args) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.count;
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let lanes = lanes(a.closure, a.closures, n)?;
+            let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));
+            let wo = soa_in(a.wo_x, a.wo_y, a.wo_z, n, "wo")?;
+            let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
+            let out = EvalOutput {
+                value: soa_out(a.value_r, a.value_g, a.value_b, n, "value")?,
+                pdf: output(a.pdf, n, "pdf")?,
+                pdf_reverse: optional(a.pdf_reverse, n),
+            };
+            with_input!(lanes, n, active, wo, |input| batch::eval(&input, wi, out))
+        }
+    })
+}
+
+/// `glint_pdf` over SoA arrays.
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on `glint_pdf_batch_args`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_pdf_batch(args: *const glint_pdf_batch_args) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.count;
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let lanes = lanes(a.closure, a.closures, n)?;
+            let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));
+            let wo = soa_in(a.wo_x, a.wo_y, a.wo_z, n, "wo")?;
+            let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
+            let pdf = output(a.pdf, n, "pdf")?;
+            with_input!(lanes, n, active, wo, |input| batch::pdf(&input, wi, pdf))
+        }
+    })
+}
+
+/// `glint_sample` over SoA arrays.
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on `glint_sample_batch_args`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_sample_batch(args: *const glint_sample_batch_args) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.count;
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let lanes = lanes(a.closure, a.closures, n)?;
+            let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));
+            let wo = soa_in(a.wo_x, a.wo_y, a.wo_z, n, "wo")?;
+            let u = SampleRandoms {
+                u_lobe: input(a.u_lobe, n, "u_lobe")?,
+                u0: input(a.u0, n, "u0")?,
+                u1: input(a.u1, n, "u1")?,
+            };
+            let value = if a.value_r.is_null() && a.value_g.is_null() && a.value_b.is_null() {
+                None
+            } else {
+                Some(soa_out(a.value_r, a.value_g, a.value_b, n, "value")?)
+            };
+            let out = SampleOutput {
+                wi: soa_out(a.wi_x, a.wi_y, a.wi_z, n, "wi")?,
+                pdf: output(a.pdf, n, "pdf")?,
+                weight: soa_out(a.weight_r, a.weight_g, a.weight_b, n, "weight")?,
+                value,
+                flags: optional(a.flags, n),
+                lobe: optional(a.lobe, n),
+                eta: optional(a.eta, n),
+                roughness: optional(a.roughness, n),
+            };
+            with_input!(lanes, n, active, wo, |input| batch::sample(&input, u, out))
+        }
+    })
+}

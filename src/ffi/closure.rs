@@ -1,0 +1,561 @@
+//! Arenas, closure building, and eval / sample / pdf / albedo on a closure or one lobe.
+
+use super::*;
+use crate::closure::{Arena, Closure, EvalResult, SampleResult};
+use crate::json;
+use crate::lobes::Transport;
+use crate::math::{Frame, Rgb, Vec3};
+
+/// An arena of closures owned by the caller; one thread at a time.
+pub struct glint_arena {
+    arena: Arena<glint_closure>,
+}
+
+/// A closure: built inside an arena, immutable and thread-safe once finished.
+pub struct glint_closure {
+    pub(crate) closure: Closure,
+    runtime: *const glint_runtime,
+}
+
+/// A shading frame: unit normal and an optional tangent (all zeros: chosen
+/// automatically). Neither needs to be normalized; the tangent is made orthogonal.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct glint_frame {
+    pub normal: glint_vec3,
+    pub tangent: glint_vec3,
+}
+
+/// Result of an eval.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct glint_eval_result {
+    /// Set by the caller to `sizeof(glint_eval_result)`.
+    pub struct_size: u32,
+    /// `f(wo, wi) |cos theta_i|`, linear RGB.
+    pub value: [f32; 3],
+    /// Solid-angle density of sampling `wi` from `wo`.
+    pub pdf: f32,
+    /// Density of sampling `wo` from `wi`.
+    pub pdf_reverse: f32,
+}
+
+impl Sized32 for glint_eval_result {
+    fn struct_size(&self) -> u32 {
+        self.struct_size
+    }
+}
+
+/// Result of a sample. For SPECULAR samples, `value` is the reflected or
+/// transmitted fraction and `pdf` the discrete probability of the event.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct glint_sample_result {
+    /// Set by the caller to `sizeof(glint_sample_result)`.
+    pub struct_size: u32,
+    /// Sampled direction, unit, world space, pointing away from the surface.
+    pub wi: glint_vec3,
+    pub value: [f32; 3],
+    pub pdf: f32,
+    /// `value / pdf`.
+    pub weight: [f32; 3],
+    /// `GLINT_FLAG_REFLECTION` or `_TRANSMISSION`, with `_DIFFUSE`, `_GLOSSY` or `_SPECULAR`.
+    pub flags: u32,
+    /// Index of the lobe that was sampled.
+    pub lobe: u32,
+    /// Relative IOR crossed (transmission), else 1.
+    pub eta: f32,
+    /// Roughness of the sampled lobe in [0, 1] (0 for specular).
+    pub roughness: f32,
+}
+
+impl Sized32 for glint_sample_result {
+    fn struct_size(&self) -> u32 {
+        self.struct_size
+    }
+}
+
+pub(crate) fn vec3_in(v: glint_vec3, what: &str) -> Result<Vec3<f32>, Error> {
+    Vec3::try_unit(v.x, v.y, v.z, what)
+}
+
+fn vec3_out(v: Vec3<f32>) -> glint_vec3 {
+    glint_vec3 {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
+
+/// # Safety
+/// `p` is NULL or a live closure handle.
+unsafe fn closure_ref<'a>(p: *const glint_closure) -> Result<&'a Closure, Error> {
+    // SAFETY: forwarded contract.
+    Ok(&unsafe { deref(p, "closure") }?.closure)
+}
+
+/// Create an arena with room for `capacity` closures.
+///
+/// # Safety
+/// `out` is NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_arena_create(
+    capacity: usize,
+    out: *mut *mut glint_arena,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let out = unsafe { deref_mut(out, "out") }?;
+        *out = std::ptr::null_mut();
+        let arena = Arena::new(capacity)?;
+        *out = Box::into_raw(Box::new(glint_arena { arena }));
+        Ok(())
+    })
+}
+
+/// Free every closure of the arena at once; their handles become invalid.
+///
+/// # Safety
+/// `arena` is NULL or a live arena handle.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_arena_reset(arena: *mut glint_arena) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        unsafe { deref_mut(arena, "arena") }?.arena.reset();
+        Ok(())
+    })
+}
+
+/// Destroy an arena and its closures (NULL is ignored).
+///
+/// # Safety
+/// `arena` is NULL or a handle from `glint_arena_create` not yet destroyed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_arena_destroy(arena: *mut glint_arena) {
+    guard(|| {
+        if !arena.is_null() {
+            // SAFETY: created by Box::into_raw in glint_arena_create, destroyed once.
+            drop(unsafe { Box::from_raw(arena) });
+        }
+        Ok(())
+    });
+}
+
+fn transport(flags: u32) -> Result<Transport, Error> {
+    match flags {
+        0 => Ok(Transport::Radiance),
+        GLINT_CLOSURE_IMPORTANCE => Ok(Transport::Importance),
+        _ => Err(Error::new(
+            Status::InvalidArgument,
+            format!("closure flags {flags:#x}: valid flags are 0 and GLINT_CLOSURE_IMPORTANCE"),
+        )),
+    }
+}
+
+/// Store a closure in the arena and hand out its handle.
+fn place(
+    runtime: &glint_runtime,
+    arena: &mut glint_arena,
+    closure: Closure,
+    out: &mut *mut glint_closure,
+) -> Result<(), Error> {
+    let slot = arena.arena.alloc(glint_closure { closure, runtime })?;
+    *out = slot;
+    Ok(())
+}
+
+/// Begin a closure in `arena`. `wo` (world space, toward the viewer) may be NULL; when
+/// given, it fixes view-dependent lobe weights and lobe selection. `flags` is 0 or
+/// `GLINT_CLOSURE_IMPORTANCE`. Add lobes, then call `glint_closure_finish`.
+///
+/// # Safety
+/// Handles are NULL or live; `wo` NULL or readable; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_closure_begin(
+    runtime: *const glint_runtime,
+    arena: *mut glint_arena,
+    wo: *const glint_vec3,
+    flags: u32,
+    out: *mut *mut glint_closure,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let out = unsafe { deref_mut(out, "out") }?;
+        *out = std::ptr::null_mut();
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let arena = unsafe { deref_mut(arena, "arena") }?;
+        // SAFETY: per the contract.
+        let wo = unsafe { wo.as_ref() }
+            .map(|w| vec3_in(*w, "wo"))
+            .transpose()?;
+        place(rt, arena, Closure::new(wo, transport(flags)?), out)
+    })
+}
+
+/// Add a lobe of type `type_id` with RGB `weight` (>= 0) in `frame`. `params` holds
+/// the lobe type's whole parameter block (`param_count == param_block_size`; see
+/// `glint_lobe_param_info`), or is NULL with `param_count == 0` for the defaults.
+/// `out_index` (may be NULL) receives the lobe's index in the closure.
+///
+/// # Safety
+/// `closure` is NULL or live and not finished elsewhere; `weight` NULL or 3 floats;
+/// `frame` NULL or readable; `params` NULL or `param_count` floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_closure_add_lobe(
+    closure: *mut glint_closure,
+    type_id: u32,
+    weight: *const f32,
+    frame: *const glint_frame,
+    params: *const f32,
+    param_count: usize,
+    out_index: *mut u32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { deref_mut(closure, "closure") }?;
+        if weight.is_null() {
+            return Err(null("weight"));
+        }
+        // SAFETY: non-NULL and 3 floats per the contract.
+        let weight = unsafe { std::ptr::read(weight as *const [f32; 3]) };
+        // SAFETY: per the contract.
+        let frame = unsafe { deref(frame, "frame") }?;
+        let n = vec3_in(frame.normal, "frame.normal")?;
+        let t = frame.tangent;
+        let tangent = if t.x == 0.0 && t.y == 0.0 && t.z == 0.0 {
+            None
+        } else {
+            Some(vec3_in(t, "frame.tangent")?)
+        };
+        let params = match (params.is_null(), param_count) {
+            (true, 0) => None,
+            (true, _) => return Err(null("params (with param_count > 0)")),
+            // SAFETY: non-NULL and `param_count` floats per the contract.
+            (false, n) => Some(unsafe { std::slice::from_raw_parts(params, n) }),
+        };
+        // SAFETY: the runtime outlives its closures (documented contract of glint_runtime_destroy).
+        let rt = unsafe { deref(c.runtime, "closure's runtime") }?;
+        let index = c.closure.add_lobe(
+            &rt.runtime.registry,
+            type_id,
+            weight,
+            Frame::new(n, tangent),
+            params,
+        )?;
+        if !out_index.is_null() {
+            // SAFETY: non-NULL and writable per the contract.
+            unsafe { *out_index = index as u32 };
+        }
+        Ok(())
+    })
+}
+
+/// Finish a closure: fixes lobe selection; afterwards it is immutable and may be
+/// evaluated from any thread.
+///
+/// # Safety
+/// `closure` is NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_closure_finish(closure: *mut glint_closure) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        unsafe { deref_mut(closure, "closure") }?.closure.finish()
+    })
+}
+
+/// Build and finish a whole closure from a JSON description (see the README).
+///
+/// # Safety
+/// Handles are NULL or live; `json` NULL or NUL-terminated; `wo` NULL or readable;
+/// `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_closure_from_json(
+    runtime: *const glint_runtime,
+    arena: *mut glint_arena,
+    json_text: *const c_char,
+    wo: *const glint_vec3,
+    out: *mut *mut glint_closure,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let out = unsafe { deref_mut(out, "out") }?;
+        *out = std::ptr::null_mut();
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let arena = unsafe { deref_mut(arena, "arena") }?;
+        // SAFETY: per the contract.
+        let text = unsafe { c_str(json_text, "json") }?;
+        // SAFETY: per the contract.
+        let wo = unsafe { wo.as_ref() }
+            .map(|w| vec3_in(*w, "wo"))
+            .transpose()?;
+        let closure = json::closure_from_json(&rt.runtime.registry, text, wo)?;
+        place(rt, arena, closure, out)
+    })
+}
+
+/// Number of lobes in a closure.
+///
+/// # Safety
+/// `closure` NULL or live; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_closure_lobe_count(
+    closure: *const glint_closure,
+    out: *mut u32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", c.lobes().len() as u32) }
+    })
+}
+
+/// The type id and selection probability of lobe `index`.
+///
+/// # Safety
+/// `closure` NULL or live; `type_id` and `probability` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_closure_lobe(
+    closure: *const glint_closure,
+    index: u32,
+    type_id: *mut u32,
+    probability: *mut f32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        let l = c.lobes().get(index as usize).ok_or_else(|| {
+            Error::new(
+                Status::OutOfRange,
+                format!(
+                    "lobe index {index} is out of range: the closure has {} lobes",
+                    c.lobes().len()
+                ),
+            )
+        })?;
+        // SAFETY: per the contract.
+        unsafe { write_out(type_id, "type_id", l.type_id) }?;
+        // SAFETY: per the contract.
+        unsafe { write_out(probability, "probability", l.probability) }
+    })
+}
+
+fn write_eval(out: &mut glint_eval_result, r: EvalResult) {
+    *out = glint_eval_result {
+        struct_size: out.struct_size,
+        value: r.value.to_array(),
+        pdf: r.pdf,
+        pdf_reverse: r.pdf_reverse,
+    };
+}
+
+fn write_sample(
+    out: &mut glint_sample_result,
+    r: Result<SampleResult, Error>,
+) -> Result<(), Error> {
+    let size = out.struct_size;
+    *out = glint_sample_result {
+        struct_size: size,
+        eta: 1.0,
+        ..Default::default()
+    };
+    let s = r?;
+    *out = glint_sample_result {
+        struct_size: size,
+        wi: vec3_out(s.wi),
+        value: s.value.to_array(),
+        pdf: s.pdf,
+        weight: s.weight.to_array(),
+        flags: s.flags,
+        lobe: s.lobe,
+        eta: s.eta,
+        roughness: s.roughness,
+    };
+    Ok(())
+}
+
+fn write_rgb(out: *mut f32, value: Rgb<f32>) -> Result<(), Error> {
+    if out.is_null() {
+        return Err(null("out"));
+    }
+    // SAFETY: non-NULL; the API documents `out` as 3 writable floats.
+    unsafe { std::ptr::write(out as *mut [f32; 3], value.to_array()) };
+    Ok(())
+}
+
+/// The closure at `(wo, wi)`: `sum_k weight_k f_k |cos theta_i|`, the mixture pdf
+/// and the reverse pdf. Directions are world space and need not be normalized.
+///
+/// # Safety
+/// `closure` NULL or live; `out` NULL or writable with `struct_size` set.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_eval(
+    closure: *const glint_closure,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut glint_eval_result,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        // SAFETY: per the contract.
+        let out = unsafe { out_struct(out, "result") }?;
+        write_eval(out, c.eval(vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?);
+        Ok(())
+    })
+}
+
+/// Sample the closure: `u_lobe` picks a lobe, `u0`, `u1` a direction (all in [0, 1)).
+/// Returns `GLINT_NO_SAMPLE` (with a zeroed result) when nothing can be scattered.
+///
+/// # Safety
+/// `closure` NULL or live; `out` NULL or writable with `struct_size` set.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_sample(
+    closure: *const glint_closure,
+    wo: glint_vec3,
+    u_lobe: f32,
+    u0: f32,
+    u1: f32,
+    out: *mut glint_sample_result,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        // SAFETY: per the contract.
+        let out = unsafe { out_struct(out, "result") }?;
+        write_sample(out, c.sample(vec3_in(wo, "wo")?, [u_lobe, u0, u1]))
+    })
+}
+
+/// The mixture pdf of sampling `wi` from `wo`.
+///
+/// # Safety
+/// `closure` NULL or live; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_pdf(
+    closure: *const glint_closure,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut f32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        let pdf = c.pdf(vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?;
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", pdf) }
+    })
+}
+
+/// Directional albedo `R(wo)` of the closure (RGB, written to `out[0..3]`).
+///
+/// # Safety
+/// `closure` NULL or live; `out` NULL or 3 writable floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_albedo(
+    closure: *const glint_closure,
+    wo: glint_vec3,
+    out: *mut f32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        write_rgb(out, c.albedo(vec3_in(wo, "wo")?)?)
+    })
+}
+
+/// Lobe `lobe` alone: `weight f |cos theta_i|` and that lobe's own pdfs.
+///
+/// # Safety
+/// As `glint_eval`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_eval_lobe(
+    closure: *const glint_closure,
+    lobe: u32,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut glint_eval_result,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        // SAFETY: per the contract.
+        let out = unsafe { out_struct(out, "result") }?;
+        write_eval(
+            out,
+            c.eval_lobe(lobe as usize, vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?,
+        );
+        Ok(())
+    })
+}
+
+/// Sample lobe `lobe` alone (`u_c` chooses among its discrete events, e.g. reflect or
+/// refract); value and pdf are that lobe's own.
+///
+/// # Safety
+/// As `glint_sample`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_sample_lobe(
+    closure: *const glint_closure,
+    lobe: u32,
+    wo: glint_vec3,
+    u_c: f32,
+    u0: f32,
+    u1: f32,
+    out: *mut glint_sample_result,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        // SAFETY: per the contract.
+        let out = unsafe { out_struct(out, "result") }?;
+        write_sample(
+            out,
+            c.sample_lobe(lobe as usize, vec3_in(wo, "wo")?, [u_c, u0, u1]),
+        )
+    })
+}
+
+/// The pdf of lobe `lobe` alone.
+///
+/// # Safety
+/// As `glint_pdf`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_pdf_lobe(
+    closure: *const glint_closure,
+    lobe: u32,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut f32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        let pdf = c.pdf_lobe(lobe as usize, vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?;
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", pdf) }
+    })
+}
+
+/// `weight * albedo(wo)` of lobe `lobe` alone.
+///
+/// # Safety
+/// As `glint_albedo`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_albedo_lobe(
+    closure: *const glint_closure,
+    lobe: u32,
+    wo: glint_vec3,
+    out: *mut f32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        write_rgb(out, c.albedo_lobe(lobe as usize, vec3_in(wo, "wo")?)?)
+    })
+}

@@ -1,0 +1,408 @@
+//! Version, status strings, the runtime and the lobe registry.
+
+use super::*;
+use crate::params::{self, ParamKind};
+use crate::runtime::Runtime;
+
+/// C strings of one lobe type, made once so the registry can hand out pointers.
+struct LobeStrings {
+    name: CString,
+    summary: CString,
+    params: Vec<ParamStrings>,
+}
+
+struct ParamStrings {
+    name: CString,
+    choices: CString,
+    doc: CString,
+}
+
+fn c_string(s: &str) -> CString {
+    CString::new(s.replace('\0', " ")).unwrap_or_default()
+}
+
+/// The runtime handle: owns the registry and settings. Read-only after setup.
+pub struct glint_runtime {
+    pub(crate) runtime: Runtime,
+    strings: Vec<LobeStrings>,
+}
+
+impl glint_runtime {
+    fn new(runtime: Runtime) -> Self {
+        let strings = runtime
+            .registry
+            .iter()
+            .map(|t| LobeStrings {
+                name: c_string(t.name()),
+                summary: c_string(t.summary()),
+                params: t
+                    .params()
+                    .iter()
+                    .map(|p| ParamStrings {
+                        name: c_string(p.name),
+                        choices: c_string(&p.choices().join("|")),
+                        doc: c_string(p.doc),
+                    })
+                    .collect(),
+            })
+            .collect();
+        glint_runtime { runtime, strings }
+    }
+}
+
+/// Description of a lobe type.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_lobe_info {
+    /// Set by the caller to `sizeof(glint_lobe_info)`.
+    pub struct_size: u32,
+    pub name: *const c_char,
+    pub summary: *const c_char,
+    /// Every `GLINT_FLAG_*` a sample of this lobe may carry.
+    pub flags: u32,
+    /// 1 when `f(wo, wi) == f(wi, wo)`.
+    pub reciprocal: u32,
+    pub param_count: u32,
+    /// Floats in the parameter block `glint_closure_add_lobe` takes.
+    pub param_block_size: u32,
+}
+
+impl Sized32 for glint_lobe_info {
+    fn struct_size(&self) -> u32 {
+        self.struct_size
+    }
+}
+
+/// Description of one parameter of a lobe type.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_param_info {
+    /// Set by the caller to `sizeof(glint_param_info)`.
+    pub struct_size: u32,
+    pub name: *const c_char,
+    /// `GLINT_PARAM_FLOAT`, `GLINT_PARAM_RGB` or `GLINT_PARAM_ENUM`.
+    pub param_type: u32,
+    /// Position of the first value in the parameter block.
+    pub offset: u32,
+    /// Number of floats (1, or 3 for RGB).
+    pub size: u32,
+    /// Default value (RGB: all three; ENUM: the choice index).
+    pub default_value: [f32; 3],
+    /// Inclusive range of every component (ENUM: 0 .. choice_count - 1).
+    pub min: f32,
+    pub max: f32,
+    pub choice_count: u32,
+    /// ENUM choices separated by '|', e.g. "ggx|beckmann"; "" otherwise.
+    pub choices: *const c_char,
+    pub doc: *const c_char,
+}
+
+impl Sized32 for glint_param_info {
+    fn struct_size(&self) -> u32 {
+        self.struct_size
+    }
+}
+
+/// The library version as `MAJOR * 10000 + MINOR * 100 + PATCH`.
+#[unsafe(no_mangle)]
+pub extern "C" fn glint_version() -> u32 {
+    GLINT_VERSION_MAJOR * 10000 + GLINT_VERSION_MINOR * 100 + GLINT_VERSION_PATCH
+}
+
+/// A static description of a status code (never NULL).
+#[unsafe(no_mangle)]
+pub extern "C" fn glint_status_string(status: glint_status) -> *const c_char {
+    let s: &'static CStr = match Status::ALL.get(status as usize) {
+        Some(Status::Ok) => c"success",
+        Some(Status::NullPointer) => c"a required pointer argument is NULL",
+        Some(Status::InvalidArgument) => {
+            c"invalid argument (NaN, infinite, zero-length or malformed)"
+        }
+        Some(Status::OutOfRange) => c"a value is outside its valid range",
+        Some(Status::UnknownName) => c"unknown name (lobe type, parameter, choice or config key)",
+        Some(Status::Parse) => c"malformed input text (JSON or config)",
+        Some(Status::StructSize) => c"struct_size is smaller than the structure this library needs",
+        Some(Status::ArenaFull) => c"the arena has no room for another closure",
+        Some(Status::ClosureFull) => c"the closure has no room for another lobe",
+        Some(Status::InvalidState) => c"the object is not in a state that allows this call",
+        Some(Status::Unsupported) => c"not supported by this build or machine",
+        Some(Status::NoSample) => c"no sample: the closure cannot scatter from this direction",
+        Some(Status::Panic) => c"internal error (a panic was caught at the API boundary)",
+        None => c"unknown status code",
+    };
+    s.as_ptr()
+}
+
+/// The message of the last failed call on this thread ("" if none). Valid until the
+/// next failing call on the same thread.
+#[unsafe(no_mangle)]
+pub extern "C" fn glint_last_error() -> *const c_char {
+    LAST_ERROR.with(|e| e.borrow().as_ptr())
+}
+
+/// Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
+/// commas or semicolons; valid keys: `isa` (`auto` | `scalar`).
+///
+/// # Safety
+/// `config` is NULL or a NUL-terminated string; `out` is valid for writes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_runtime_create(
+    config: *const c_char,
+    out: *mut *mut glint_runtime,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: `out` is NULL or writable per the contract.
+        let out = unsafe { deref_mut(out, "out") }?;
+        *out = std::ptr::null_mut();
+        let config = if config.is_null() {
+            ""
+        } else {
+            // SAFETY: non-NULL and NUL-terminated per the contract.
+            unsafe { c_str(config, "config") }?
+        };
+        let runtime = Runtime::new(config)?;
+        *out = Box::into_raw(Box::new(glint_runtime::new(runtime)));
+        Ok(())
+    })
+}
+
+/// Destroy a runtime (NULL is ignored). Arenas and closures made with it must not be
+/// used afterwards.
+///
+/// # Safety
+/// `runtime` is NULL or a handle from `glint_runtime_create` not yet destroyed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_runtime_destroy(runtime: *mut glint_runtime) {
+    guard(|| {
+        if !runtime.is_null() {
+            // SAFETY: created by Box::into_raw in glint_runtime_create, destroyed once.
+            drop(unsafe { Box::from_raw(runtime) });
+        }
+        Ok(())
+    });
+}
+
+/// Number of registered lobe types; their ids are `0 .. count - 1`.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `out` is NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_type_count(
+    runtime: *const glint_runtime,
+    out: *mut u32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", rt.runtime.registry.len() as u32) }
+    })
+}
+
+/// The id of the lobe type named `name`.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_type_find(
+    runtime: *const glint_runtime,
+    name: *const c_char,
+    out: *mut u32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let name = unsafe { c_str(name, "name") }?;
+        let id = rt.runtime.registry.find(name)?;
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", id) }
+    })
+}
+
+/// Describe lobe type `id`. The strings live as long as the runtime.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_type_info(
+    runtime: *const glint_runtime,
+    id: u32,
+    out: *mut glint_lobe_info,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let out = unsafe { out_struct(out, "info") }?;
+        let t = rt.runtime.registry.get(id)?;
+        let s = &rt.strings[id as usize];
+        *out = glint_lobe_info {
+            struct_size: out.struct_size,
+            name: s.name.as_ptr(),
+            summary: s.summary.as_ptr(),
+            flags: t.flags(),
+            reciprocal: u32::from(t.reciprocal()),
+            param_count: t.params().len() as u32,
+            param_block_size: params::block_size(t.params()) as u32,
+        };
+        Ok(())
+    })
+}
+
+/// Describe parameter `index` of lobe type `id`.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_param_info(
+    runtime: *const glint_runtime,
+    id: u32,
+    index: u32,
+    out: *mut glint_param_info,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let out = unsafe { out_struct(out, "info") }?;
+        let t = rt.runtime.registry.get(id)?;
+        let specs = t.params();
+        let spec = specs.get(index as usize).ok_or_else(|| {
+            Error::new(
+                Status::OutOfRange,
+                format!(
+                    "{} has {} parameters; index {index} is out of range",
+                    t.name(),
+                    specs.len()
+                ),
+            )
+        })?;
+        let s = &rt.strings[id as usize].params[index as usize];
+        *out = glint_param_info {
+            struct_size: out.struct_size,
+            name: s.name.as_ptr(),
+            param_type: match spec.kind {
+                ParamKind::Float => GLINT_PARAM_FLOAT,
+                ParamKind::Rgb => GLINT_PARAM_RGB,
+                ParamKind::Enum(_) => GLINT_PARAM_ENUM,
+            },
+            offset: params::offset_of(specs, index as usize) as u32,
+            size: spec.kind.size() as u32,
+            default_value: spec.default,
+            min: spec.min,
+            max: spec.max,
+            choice_count: spec.choices().len() as u32,
+            choices: s.choices.as_ptr(),
+            doc: s.doc.as_ptr(),
+        };
+        Ok(())
+    })
+}
+
+/// The index of the parameter named `name` of lobe type `id`.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_param_find(
+    runtime: *const glint_runtime,
+    id: u32,
+    name: *const c_char,
+    out: *mut u32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let name = unsafe { c_str(name, "name") }?;
+        let t = rt.runtime.registry.get(id)?;
+        let index = t
+            .params()
+            .iter()
+            .position(|p| p.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = t.params().iter().map(|p| p.name).collect();
+                Error::new(
+                    Status::UnknownName,
+                    format!(
+                        "{} has no parameter \"{name}\"; valid: {}",
+                        t.name(),
+                        names.join(", ")
+                    ),
+                )
+            })?;
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", index as u32) }
+    })
+}
+
+/// The index of choice `choice` of enum parameter `index` of lobe type `id`, as a
+/// float ready to store in a parameter block.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `choice` NULL or NUL-terminated; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_param_choice(
+    runtime: *const glint_runtime,
+    id: u32,
+    index: u32,
+    choice: *const c_char,
+    out: *mut f32,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let choice = unsafe { c_str(choice, "choice") }?;
+        let t = rt.runtime.registry.get(id)?;
+        let spec = t.params().get(index as usize).ok_or_else(|| {
+            Error::new(
+                Status::OutOfRange,
+                format!("{}: parameter index {index} is out of range", t.name()),
+            )
+        })?;
+        if !matches!(spec.kind, ParamKind::Enum(_)) {
+            return Err(Error::new(
+                Status::InvalidArgument,
+                format!("{}.{} is not an enum parameter", t.name(), spec.name),
+            ));
+        }
+        let value = spec.choice_index(t.name(), choice)? as f32;
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", value) }
+    })
+}
+
+/// Fill `out[0 .. capacity)` with the default parameter block of lobe type `id`;
+/// `capacity` must be at least its `param_block_size`.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_param_defaults(
+    runtime: *const glint_runtime,
+    id: u32,
+    out: *mut f32,
+    capacity: usize,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        let t = rt.runtime.registry.get(id)?;
+        let size = params::block_size(t.params());
+        if out.is_null() {
+            return Err(null("out"));
+        }
+        if capacity < size {
+            return Err(Error::new(
+                Status::OutOfRange,
+                format!("{} needs {size} floats; capacity is {capacity}", t.name()),
+            ));
+        }
+        // SAFETY: non-NULL and valid for `capacity >= size` floats per the contract.
+        let out = unsafe { std::slice::from_raw_parts_mut(out, size) };
+        params::write_defaults(t.params(), out);
+        Ok(())
+    })
+}
