@@ -1,15 +1,23 @@
-//! Directional albedo of single-scattering microfacet reflection, tabulated once
-//! per distribution and looked up by the lobes' `albedo`.
+//! Directional albedo of single-scattering microfacet lobes, tabulated once per
+//! distribution at first use and read with linear interpolation.
 //!
-//! With Schlick's weight `s(c) = (1 - c)^5`, the albedo of a reflection lobe with
-//! Fresnel `F0 + (F90 - F0) s` splits into `F0 A + F90 B` (the "split sum"), where
-//! `A(mu, r) = E[(1 - s(wo.m)) G2/G1]` and `B(mu, r) = E[s(wo.m) G2/G1]` over visible
-//! normals `m` (so `A + B` is the lobe's energy with `F = 1`). The table is filled at
-//! first use by stratified visible-normal sampling (16 x 16 strata per cell) over a
-//! 32 x 32 grid in `mu = cos theta_o` and `r = sqrt(alpha)`, and read with bilinear
-//! interpolation; anisotropic lobes use `alpha = sqrt(alpha_x alpha_y)`. The table's
-//! error against numerical integration is measured in `tests/lobes_albedo.rs`.
+//! Reflection ([`ReflectionTable`]): with `c = wo.m` and Schlick's `s = (1 - c)^5`, a
+//! Fresnel fitted as `F0 (1 - s) + F90 s - a c (1 - c)^6`
+//! (`FresnelModel::split_sum_fit`) makes the albedo `F0 A + F90 B - a C`, where
+//! `A = E[(1 - s) G2/G1]`, `B = E[s G2/G1]`, `C = E[c (1 - c)^6 G2/G1]` over visible
+//! normals `m` and reflected directions above the surface. Grid: 32 x 32 in
+//! `mu = cos theta_o` and `r = sqrt(alpha)`, 16 x 16 strata per cell.
+//!
+//! Dielectric ([`DielectricTable`]): `E[F G2/G1]` (reflection) and `E[(1 - F) G2/G1]`
+//! (transmission, importance transport) over visible normals, on a 16 x 16 x 16 grid in
+//! `|mu|`, `r` and `t = |eta' - 1| / (eta' + 1)` (so `t^2` is the normal-incidence
+//! reflectance) for `eta' > 1` and `eta' < 1` separately, 8 x 8 strata per cell;
+//! `t` beyond the grid (`eta'` above 39 or below 1/39) is clamped.
+//!
+//! Anisotropic lobes use `alpha = sqrt(alpha_x alpha_y)`. The tables' errors against
+//! numerical integration are measured in the tests.
 
+use crate::fresnel;
 use crate::math::{Lane, Vec3};
 use crate::microfacet::{Distribution, NdfKind};
 use std::sync::OnceLock;
@@ -17,79 +25,210 @@ use std::sync::OnceLock;
 const N: usize = 32;
 const STRATA: usize = 16;
 
-/// The `A` and `B` tables of one distribution, `N x N`, indexed `[r][mu]`.
-pub struct AlbedoTable {
-    a: Vec<f32>,
-    b: Vec<f32>,
+/// Stratified sample positions `((i + 0.5) / n, (j + 0.5) / n)`.
+fn strata(n: usize) -> impl Iterator<Item = (f32, f32)> {
+    (0..n * n).map(move |k| {
+        let (i, j) = (k / n, k % n);
+        ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32)
+    })
 }
 
-impl AlbedoTable {
+/// Grid coordinate of `x` in [0, 1] on `n` points: the lower index and the fraction.
+#[inline(always)]
+fn grid<L: Lane>(x: L, n: usize) -> (L, L) {
+    let pos = x.clamp(L::zero(), L::one()) * L::splat((n - 1) as f32);
+    let i = pos.floor().min(L::splat((n - 2) as f32));
+    (i, pos - i)
+}
+
+#[inline(always)]
+fn lerp<L: Lane>(a: L, b: L, t: L) -> L {
+    a + (b - a) * t
+}
+
+/// The distribution `kind` at grid roughness `r` (isotropic).
+fn grid_distribution(kind: NdfKind, r: f32) -> Distribution<f32> {
+    Distribution::from_roughness(kind, r, 0.0)
+}
+
+/// The lookup roughness of a (possibly anisotropic) distribution.
+#[inline(always)]
+fn lookup_roughness<L: Lane>(dist: &Distribution<L>) -> L {
+    (dist.alpha_x * dist.alpha_y).sqrt().sqrt()
+}
+
+/// `wo` at `cos theta = mu` in the xz-plane.
+fn direction(mu: f32) -> Vec3<f32> {
+    Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
+}
+
+/// The `A`, `B` and `C` tables of one distribution, `N x N`, indexed `[r][mu]`.
+pub struct ReflectionTable {
+    abc: [Vec<f32>; 3],
+}
+
+impl ReflectionTable {
     /// The table for `kind`, computed on first use.
-    pub fn get(kind: NdfKind) -> &'static AlbedoTable {
-        static GGX: OnceLock<AlbedoTable> = OnceLock::new();
-        static BECKMANN: OnceLock<AlbedoTable> = OnceLock::new();
+    pub fn get(kind: NdfKind) -> &'static ReflectionTable {
+        static GGX: OnceLock<ReflectionTable> = OnceLock::new();
+        static BECKMANN: OnceLock<ReflectionTable> = OnceLock::new();
         match kind {
-            NdfKind::Ggx => GGX.get_or_init(|| AlbedoTable::compute(kind)),
-            NdfKind::Beckmann => BECKMANN.get_or_init(|| AlbedoTable::compute(kind)),
+            NdfKind::Ggx => GGX.get_or_init(|| ReflectionTable::compute(kind)),
+            NdfKind::Beckmann => BECKMANN.get_or_init(|| ReflectionTable::compute(kind)),
         }
     }
 
-    fn compute(kind: NdfKind) -> AlbedoTable {
-        let mut a = vec![0.0; N * N];
-        let mut b = vec![0.0; N * N];
+    fn compute(kind: NdfKind) -> ReflectionTable {
+        let mut abc = [vec![0.0; N * N], vec![0.0; N * N], vec![0.0; N * N]];
         for ri in 0..N {
-            let r = ri as f32 / (N - 1) as f32;
-            let dist = Distribution::<f32>::from_roughness(kind, r, 0.0);
+            let dist = grid_distribution(kind, ri as f32 / (N - 1) as f32);
             for mi in 0..N {
                 // mu = 0 has no albedo of its own: use the limit from just above.
-                let mu = (mi as f32 / (N - 1) as f32).max(1e-3);
-                let wo = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+                let wo = direction((mi as f32 / (N - 1) as f32).max(1e-3));
                 let g1 = dist.g1(wo);
-                let (mut sum_a, mut sum_b) = (0.0f64, 0.0f64);
-                for i in 0..STRATA {
-                    for j in 0..STRATA {
-                        let u0 = (i as f32 + 0.5) / STRATA as f32;
-                        let u1 = (j as f32 + 0.5) / STRATA as f32;
-                        let m = dist.sample_visible(wo, u0, u1);
-                        let wi = wo.reflect(m);
-                        if wi.z <= 0.0 {
-                            continue;
-                        }
-                        let w = f64::from(dist.g2(wo, wi) / g1);
-                        let s = f64::from((1.0 - wo.dot(m)).clamp(0.0, 1.0)).powi(5);
-                        sum_a += w * (1.0 - s);
-                        sum_b += w * s;
+                let mut sum = [0.0f64; 3];
+                for (u0, u1) in strata(STRATA) {
+                    let m = dist.sample_visible(wo, u0, u1);
+                    let wi = wo.reflect(m);
+                    if wi.z <= 0.0 {
+                        continue;
                     }
+                    let w = f64::from(dist.g2(wo, wi) / g1);
+                    let c = f64::from(wo.dot(m).clamp(0.0, 1.0));
+                    let s = (1.0 - c).powi(5);
+                    sum[0] += w * (1.0 - s);
+                    sum[1] += w * s;
+                    sum[2] += w * c * (1.0 - c).powi(6);
                 }
-                let n = (STRATA * STRATA) as f64;
-                a[ri * N + mi] = (sum_a / n) as f32;
-                b[ri * N + mi] = (sum_b / n) as f32;
+                for (table, total) in abc.iter_mut().zip(sum) {
+                    table[ri * N + mi] = (total / (STRATA * STRATA) as f64) as f32;
+                }
             }
         }
-        AlbedoTable { a, b }
+        ReflectionTable { abc }
     }
 
-    /// `(A, B)` at `mu = cos theta_o` and the distribution's roughness.
+    /// `(A, B, C)` at `mu = cos theta_o` and the distribution's roughness.
     #[inline(always)]
-    pub fn lookup<L: Lane>(&self, mu: L, dist: &Distribution<L>) -> (L, L) {
-        let r = (dist.alpha_x * dist.alpha_y).sqrt().sqrt();
-        let scale = L::splat((N - 1) as f32);
-        let x = mu.clamp(L::zero(), L::one()) * scale;
-        let y = r.clamp(L::zero(), L::one()) * scale;
-        let max_index = L::splat((N - 2) as f32);
-        let x0 = x.floor().min(max_index);
-        let y0 = y.floor().min(max_index);
-        let (fx, fy) = (x - x0, y - y0);
+    pub fn lookup<L: Lane>(&self, mu: L, dist: &Distribution<L>) -> [L; 3] {
+        let (x0, fx) = grid(mu, N);
+        let (y0, fy) = grid(lookup_roughness(dist), N);
         let base = y0 * L::splat(N as f32) + x0;
-        let bilerp = |t: &[f32]| {
-            let v00 = L::gather(t, base);
-            let v10 = L::gather(t, base + L::one());
-            let v01 = L::gather(t, base + L::splat(N as f32));
-            let v11 = L::gather(t, base + L::splat(N as f32 + 1.0));
-            let top = v00 + (v10 - v00) * fx;
-            let bottom = v01 + (v11 - v01) * fx;
-            top + (bottom - top) * fy
+        let row = L::splat(N as f32);
+        self.abc.each_ref().map(|t| {
+            let at = |offset: L| L::gather(t, base + offset);
+            lerp(
+                lerp(at(L::zero()), at(L::one()), fx),
+                lerp(at(row), at(row + L::one()), fx),
+                fy,
+            )
+        })
+    }
+}
+
+const DN: usize = 16;
+const DIELECTRIC_STRATA: usize = 8;
+/// Largest `t = |eta' - 1| / (eta' + 1)` on the grid (`eta' = 39`).
+const T_MAX: f32 = 0.95;
+
+/// Reflected and transmitted single-scattering albedo of the rough dielectric, indexed
+/// `[side][t][r][mu]` with side 0 for `eta' > 1`, 1 for `eta' < 1`.
+pub struct DielectricTable {
+    reflect: Vec<f32>,
+    transmit: Vec<f32>,
+}
+
+impl DielectricTable {
+    /// The table for `kind`, computed on first use.
+    pub fn get(kind: NdfKind) -> &'static DielectricTable {
+        static GGX: OnceLock<DielectricTable> = OnceLock::new();
+        static BECKMANN: OnceLock<DielectricTable> = OnceLock::new();
+        match kind {
+            NdfKind::Ggx => GGX.get_or_init(|| DielectricTable::compute(kind)),
+            NdfKind::Beckmann => BECKMANN.get_or_init(|| DielectricTable::compute(kind)),
+        }
+    }
+
+    fn compute(kind: NdfKind) -> DielectricTable {
+        let size = 2 * DN * DN * DN;
+        let (mut reflect, mut transmit) = (vec![0.0; size], vec![0.0; size]);
+        for side in 0..2 {
+            for ti in 0..DN {
+                let t = T_MAX * ti as f32 / (DN - 1) as f32;
+                let eta_above = (1.0 + t) / (1.0 - t);
+                let eta = if side == 0 {
+                    eta_above
+                } else {
+                    1.0 / eta_above
+                };
+                for ri in 0..DN {
+                    let dist = grid_distribution(kind, ri as f32 / (DN - 1) as f32);
+                    for mi in 0..DN {
+                        let wo = direction((mi as f32 / (DN - 1) as f32).max(1e-3));
+                        let (r, tr) = Self::integrate(&dist, wo, eta);
+                        let index = ((side * DN + ti) * DN + ri) * DN + mi;
+                        reflect[index] = r;
+                        transmit[index] = tr;
+                    }
+                }
+            }
+        }
+        DielectricTable { reflect, transmit }
+    }
+
+    /// `E[F G2/G1]` and `E[(1 - F) G2/G1]` for `wo` above an interface of relative IOR `eta`.
+    fn integrate(dist: &Distribution<f32>, wo: Vec3<f32>, eta: f32) -> (f32, f32) {
+        let g1 = dist.g1(wo);
+        let (mut r, mut t) = (0.0f64, 0.0f64);
+        for (u0, u1) in strata(DIELECTRIC_STRATA) {
+            let m = dist.sample_visible(wo, u0, u1);
+            let c = wo.dot(m);
+            let f = fresnel::dielectric(c, eta);
+            let wr = wo.reflect(m);
+            if wr.z > 0.0 {
+                r += f64::from(f * dist.g2(wo, wr) / g1);
+            }
+            // Snell on the microfacet (pbrt-v4 Refract), for c > 0.
+            let sin2_t = (1.0 - c * c).max(0.0) / (eta * eta);
+            if f < 1.0 && sin2_t < 1.0 {
+                let cos_t = (1.0 - sin2_t).sqrt();
+                let wt = -wo * (1.0 / eta) + m * (c / eta - cos_t);
+                if wt.z < 0.0 {
+                    t += f64::from((1.0 - f) * dist.g2(wo, wt) / g1);
+                }
+            }
+        }
+        let n = (DIELECTRIC_STRATA * DIELECTRIC_STRATA) as f64;
+        ((r / n) as f32, (t / n) as f32)
+    }
+
+    /// Reflected and transmitted albedo (importance transport) at `|mu|`, for the relative
+    /// IOR `eta'` seen from `wo`'s side.
+    #[inline(always)]
+    pub fn lookup<L: Lane>(&self, mu: L, dist: &Distribution<L>, eta: L) -> (L, L) {
+        let t = (eta - L::one()).abs() / (eta + L::one());
+        let side = L::select(eta.lt(L::one()), L::one(), L::zero());
+        let (x0, fx) = grid(mu.abs(), DN);
+        let (y0, fy) = grid(lookup_roughness(dist), DN);
+        let (z0, fz) = grid(t * L::splat(1.0 / T_MAX), DN);
+        let n = L::splat(DN as f32);
+        let base = ((side * n + z0) * n + y0) * n + x0;
+        let read = |table: &[f32]| {
+            let at = |dz: f32, dy: f32, dx: f32| {
+                L::gather(
+                    table,
+                    base + L::splat(dz * (DN * DN) as f32 + dy * DN as f32 + dx),
+                )
+            };
+            let plane = |dz: f32| {
+                lerp(
+                    lerp(at(dz, 0.0, 0.0), at(dz, 0.0, 1.0), fx),
+                    lerp(at(dz, 1.0, 0.0), at(dz, 1.0, 1.0), fx),
+                    fy,
+                )
+            };
+            lerp(plane(0.0), plane(1.0), fz)
         };
-        (bilerp(&self.a), bilerp(&self.b))
+        (read(&self.reflect), read(&self.transmit))
     }
 }

@@ -12,13 +12,13 @@
 //!   `artistic`, with `f0`, `f90`, `eta`, `k`, `reflectivity`, `edge_tint`).
 //!
 //! Sampling draws a visible normal, so the weight is `F G2 / G1`. Albedo: the
-//! split-sum table of `crate::albedo_table` with `(F(0 deg), F90)` (exact for
-//! Schlick, an approximation for complex IORs); exact `F(cos_o)` when delta.
+//! reflection table of `crate::albedo_table` with the Fresnel's split-sum fit (exact
+//! for Schlick, a fitted Lazanyi term for complex IORs); exact `F(cos_o)` when delta.
 //! One-sided: 0 when either direction is below the surface.
 
 use super::fresnel_params::{self, with_fresnel_params};
 use super::{Eval, Model, Params, Sample, Transport, both_above, flags};
-use crate::albedo_table::AlbedoTable;
+use crate::albedo_table::ReflectionTable;
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::microfacet::{Distribution, NdfKind};
@@ -132,9 +132,9 @@ pub(crate) fn microfacet_reflection_albedo<L: Lane>(
     fresnel: &FresnelModel<L>,
     wo: Vec3<L>,
 ) -> Rgb<L> {
-    let (a, b) = AlbedoTable::get(dist.kind).lookup(wo.z, dist);
-    let (f0, f90) = fresnel.normal_and_grazing();
-    let rough = f0 * a + f90 * b;
+    let [a, b, c] = ReflectionTable::get(dist.kind).lookup(wo.z, dist);
+    let (f0, f90, lazanyi) = fresnel.split_sum_fit();
+    let rough = (f0 * a + f90 * b).zip(lazanyi, |v, l| (v - l * c).max(L::zero()));
     let exact = fresnel.eval(wo.z);
     let albedo = Rgb::select(dist.is_delta(), exact, rough);
     Rgb::select(wo.z.gt(L::zero()), albedo, Rgb::zero())

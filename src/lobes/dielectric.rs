@@ -17,13 +17,12 @@
 //!   1e-4 of 1 the interface is index-matched and treated as smooth (the rough
 //!   half-vector is undefined when `wi = -wo`).
 //!
-//! Albedo: exact `F + (1 - F) / eta'^2` (radiance) when smooth; when rough, that
-//! times the single-scattering energy `A + B` of `crate::albedo_table`, an
-//! approximation whose error is measured in the tests.
+//! Albedo: exact `F + (1 - F) / eta'^2` (radiance) when smooth; when rough, the
+//! reflected and transmitted single-scattering tables of `crate::albedo_table`.
 
 use super::conductor::{DISTRIBUTION_CHOICES, ndf_kind};
 use super::{Eval, Model, Params, Sample, Transport, flags};
-use crate::albedo_table::AlbedoTable;
+use crate::albedo_table::DielectricTable;
 use crate::fresnel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::microfacet::Distribution;
@@ -227,11 +226,12 @@ impl Model for Dielectric {
 
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, mode: Transport) -> Rgb<L> {
         let cos_o = wo.z;
-        let f = fresnel::dielectric(cos_o, p.eta);
         let etap = L::select(cos_o.gt(L::zero()), p.eta, L::one() / p.eta);
-        let smooth = f + (L::one() - f) * transmission_scale(etap, mode);
-        let (a, b) = AlbedoTable::get(p.dist.kind).lookup(cos_o.abs(), &p.dist);
-        let albedo = L::select(p.smooth, smooth, smooth * (a + b));
+        let scale = transmission_scale(etap, mode);
+        let f = fresnel::dielectric(cos_o, p.eta);
+        let smooth = f + (L::one() - f) * scale;
+        let (r, t) = DielectricTable::get(p.dist.kind).lookup(cos_o, &p.dist, etap);
+        let albedo = L::select(p.smooth, smooth, r + t * scale);
         Rgb::splat(L::select(cos_o.eq(L::zero()), L::zero(), albedo))
     }
 }
