@@ -10,8 +10,15 @@ use std::hint::black_box;
 
 const N: usize = 1024;
 
+/// `wo`, `wi` and random triples for `N` calls.
+struct Inputs {
+    wo: Vec<Vec3<f32>>,
+    wi: Vec<Vec3<f32>>,
+    u: Vec<[f32; 3]>,
+}
+
 /// Deterministic directions in the upper hemisphere and random triples.
-fn inputs() -> (Vec<Vec3<f32>>, Vec<Vec3<f32>>, Vec<[f32; 3]>) {
+fn inputs() -> Inputs {
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = move || {
         state ^= state << 13;
@@ -28,12 +35,12 @@ fn inputs() -> (Vec<Vec3<f32>>, Vec<Vec3<f32>>, Vec<[f32; 3]>) {
     let wo: Vec<_> = (0..N).map(|_| dir()).collect();
     let wi: Vec<_> = (0..N).map(|_| dir()).collect();
     let u: Vec<_> = (0..N).map(|_| [next(), next(), next()]).collect();
-    (wo, wi, u)
+    Inputs { wo, wi, u }
 }
 
 fn lobes(c: &mut Criterion) {
     let registry = Registry::with_builtins();
-    let (wo, wi, u) = inputs();
+    let Inputs { wo, wi, u } = inputs();
     for lobe in registry.iter() {
         let mut block = vec![0.0; params::block_size(lobe.params())];
         params::write_defaults(lobe.params(), &mut block);
@@ -59,7 +66,7 @@ fn lobes(c: &mut Criterion) {
 
 fn closure(c: &mut Criterion) {
     let registry = Registry::with_builtins();
-    let (wo, wi, u) = inputs();
+    let Inputs { wo, wi, u } = inputs();
     let json = r#"{"lobes": [
         {"type": "lambert", "weight": 0.5},
         {"type": "conductor", "roughness": 0.3, "fresnel": "artistic"}]}"#;
