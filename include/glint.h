@@ -44,7 +44,7 @@
 #define GLINT_CLOSURE_IMPORTANCE 1
 
 /*
- Parameter types of `glint_param_info.type`.
+ Parameter types of `glint_param_info.param_type`.
  */
 #define GLINT_PARAM_FLOAT 0
 
@@ -422,7 +422,7 @@ glint_status glint_closure_add_lobe(struct glint_closure *closure, uint32_t type
 glint_status glint_closure_finish(struct glint_closure *closure);
 
 /*
- Build and finish a whole closure from a JSON description (see the README).
+ Build and finish a whole closure from the JSON description `json_text` (see the README).
 
  # Safety
  Handles are NULL or live; `json` NULL or NUL-terminated; `wo` NULL or readable;
@@ -457,7 +457,8 @@ glint_status glint_eval(const struct glint_closure *closure, struct glint_vec3 w
 
 /*
  Sample the closure: `u_lobe` picks a lobe, `u0`, `u1` a direction (all in [0, 1)).
- Returns `GLINT_NO_SAMPLE` (with a zeroed result) when nothing can be scattered.
+ Returns `GLINT_NO_SAMPLE` when nothing can be scattered; on any failure the result
+ is zeroed (`eta` = 1).
 
  # Safety
  `closure` NULL or live; `out` NULL or writable with `struct_size` set.
@@ -597,8 +598,8 @@ glint_status glint_lobe_param_find(const struct glint_runtime *runtime, uint32_t
 glint_status glint_lobe_param_choice(const struct glint_runtime *runtime, uint32_t id, uint32_t index, const char *choice, float *out);
 
 /*
- Fill `out[0 .. capacity)` with the default parameter block of lobe type `id`;
- `capacity` must be at least its `param_block_size`.
+ Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
+ `capacity` (floats available at `out`) must be at least its `param_block_size`.
 
  # Safety
  `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.

@@ -265,7 +265,7 @@ pub unsafe extern "C" fn glint_closure_finish(closure: *mut glint_closure) -> gl
     })
 }
 
-/// Build and finish a whole closure from a JSON description (see the README).
+/// Build and finish a whole closure from the JSON description `json_text` (see the README).
 ///
 /// # Safety
 /// Handles are NULL or live; `json` NULL or NUL-terminated; `wo` NULL or readable;
@@ -287,7 +287,7 @@ pub unsafe extern "C" fn glint_closure_from_json(
         // SAFETY: per the contract.
         let arena = unsafe { deref_mut(arena, "arena") }?;
         // SAFETY: per the contract.
-        let text = unsafe { c_str(json_text, "json") }?;
+        let text = unsafe { c_str(json_text, "json_text") }?;
         // SAFETY: per the contract.
         let wo = unsafe { wo.as_ref() }
             .map(|w| vec3_in(*w, "wo"))
@@ -337,10 +337,19 @@ pub unsafe extern "C" fn glint_closure_lobe(
                 ),
             )
         })?;
-        // SAFETY: per the contract.
-        unsafe { write_out(type_id, "type_id", l.type_id) }?;
-        // SAFETY: per the contract.
-        unsafe { write_out(probability, "probability", l.probability) }
+        if type_id.is_null() || probability.is_null() {
+            return Err(null(if type_id.is_null() {
+                "type_id"
+            } else {
+                "probability"
+            }));
+        }
+        // SAFETY: both non-NULL and writable per the contract.
+        unsafe {
+            *type_id = l.type_id;
+            *probability = l.probability;
+        }
+        Ok(())
     })
 }
 
@@ -410,7 +419,8 @@ pub unsafe extern "C" fn glint_eval(
 }
 
 /// Sample the closure: `u_lobe` picks a lobe, `u0`, `u1` a direction (all in [0, 1)).
-/// Returns `GLINT_NO_SAMPLE` (with a zeroed result) when nothing can be scattered.
+/// Returns `GLINT_NO_SAMPLE` when nothing can be scattered; on any failure the result
+/// is zeroed (`eta` = 1).
 ///
 /// # Safety
 /// `closure` NULL or live; `out` NULL or writable with `struct_size` set.
@@ -428,7 +438,10 @@ pub unsafe extern "C" fn glint_sample(
         let c = unsafe { closure_ref(closure) }?;
         // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
-        write_sample(out, c.sample(vec3_in(wo, "wo")?, [u_lobe, u0, u1]))
+        write_sample(
+            out,
+            vec3_in(wo, "wo").and_then(|wo| c.sample(wo, [u_lobe, u0, u1])),
+        )
     })
 }
 

@@ -1,7 +1,7 @@
 //! The C ABI: the only place with `extern "C"`, raw pointers and `catch_unwind`.
 //! `include/glint.h` is generated from these files by cbindgen (see `tests/header.rs`).
 //!
-//! Rules (DESIGN.md, "C ABI rules"): every function that can fail returns a
+//! Rules (../shared/DESIGN.md, "C ABI rules"; ARCHITECTURE.md): every function that can fail returns a
 //! `glint_status` and leaves a per-thread message for `glint_last_error()`; every
 //! body runs inside a panic boundary; structs that may grow begin with `struct_size`.
 
@@ -56,7 +56,7 @@ pub const GLINT_FLAG_SPECULAR: u32 = 16;
 /// `glint_closure_begin` flag: the closure transports importance (adjoint), not radiance.
 pub const GLINT_CLOSURE_IMPORTANCE: u32 = 1;
 
-/// Parameter types of `glint_param_info.type`.
+/// Parameter types of `glint_param_info.param_type`.
 pub const GLINT_PARAM_FLOAT: u32 = 0;
 pub const GLINT_PARAM_RGB: u32 = 1;
 pub const GLINT_PARAM_ENUM: u32 = 2;

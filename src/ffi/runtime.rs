@@ -374,8 +374,8 @@ pub unsafe extern "C" fn glint_lobe_param_choice(
     })
 }
 
-/// Fill `out[0 .. capacity)` with the default parameter block of lobe type `id`;
-/// `capacity` must be at least its `param_block_size`.
+/// Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
+/// `capacity` (floats available at `out`) must be at least its `param_block_size`.
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.
