@@ -86,7 +86,8 @@ impl<L: Lane> Distribution<L> {
             }
             NdfKind::Beckmann => {
                 // a = 1 / (alpha tan theta); Lambda = (exp(-a^2) / (a sqrt(pi)) - erfc(a)) / 2.
-                let a = w.z.abs().safe_div(proj2.sqrt());
+                // Along the normal (proj2 = 0) a is infinite and Lambda 0.
+                let a = L::select(proj2.gt(L::zero()), w.z.abs().safe_div(proj2.sqrt()), big);
                 let lam =
                     L::splat(0.5) * ((-(a * a)).exp() * L::splat(INV_SQRT_PI) / a - erfc_nonneg(a));
                 // Lambda < 1e-9 past a = 4, where the two terms cancel in f32.

@@ -1,0 +1,145 @@
+//! Test plumbing shared by the integration tests: lobe lookup, parameter blocks built
+//! by parameter name from each lobe's schema, a deterministic random generator and
+//! tolerance checks. No expected value is computed here (see `tests/reference`).
+#![allow(dead_code)]
+
+use glint::lobes::LobeType;
+use glint::params::{ParamKind, ParamSpec, block_size, offset_of, write_defaults};
+use glint::registry::Registry;
+
+/// The built-in lobe type named `name`.
+pub fn lobe(name: &str) -> &'static dyn LobeType {
+    let registry = Registry::with_builtins();
+    let id = registry.find(name).expect("built-in lobe");
+    registry.get(id).expect("registered id")
+}
+
+/// A lobe's parameter block, starting from the schema's defaults and edited by name.
+#[derive(Clone, Debug)]
+pub struct Block {
+    specs: &'static [ParamSpec],
+    pub values: Vec<f32>,
+}
+
+impl Block {
+    pub fn defaults(lobe: &'static dyn LobeType) -> Block {
+        let specs = lobe.params();
+        let mut values = vec![0.0; block_size(specs)];
+        write_defaults(specs, &mut values);
+        Block { specs, values }
+    }
+
+    fn index(&self, name: &str) -> usize {
+        self.specs
+            .iter()
+            .position(|s| s.name == name)
+            .unwrap_or_else(|| panic!("no parameter named {name}"))
+    }
+
+    /// Offset of parameter `name` in the block.
+    pub fn offset(&self, name: &str) -> usize {
+        offset_of(self.specs, self.index(name))
+    }
+
+    pub fn float(mut self, name: &str, v: f32) -> Block {
+        let i = self.index(name);
+        assert_eq!(
+            self.specs[i].kind,
+            ParamKind::Float,
+            "{name} is not a float"
+        );
+        let at = offset_of(self.specs, i);
+        self.values[at] = v;
+        self
+    }
+
+    pub fn rgb(mut self, name: &str, v: [f32; 3]) -> Block {
+        let i = self.index(name);
+        assert_eq!(self.specs[i].kind, ParamKind::Rgb, "{name} is not an rgb");
+        let at = offset_of(self.specs, i);
+        self.values[at..at + 3].copy_from_slice(&v);
+        self
+    }
+
+    pub fn choice(mut self, name: &str, choice: &str) -> Block {
+        let i = self.index(name);
+        let index = self.specs[i]
+            .choices()
+            .iter()
+            .position(|c| *c == choice)
+            .unwrap_or_else(|| panic!("{name} has no choice {choice}"));
+        let at = offset_of(self.specs, i);
+        self.values[at] = index as f32;
+        self
+    }
+
+    /// The values of parameter `name` (1 or 3 slots).
+    pub fn get(&self, name: &str) -> &[f32] {
+        let i = self.index(name);
+        let at = offset_of(self.specs, i);
+        &self.values[at..at + self.specs[i].kind.size()]
+    }
+
+    pub fn as_slice(&self) -> &[f32] {
+        &self.values
+    }
+}
+
+/// SplitMix64: a small deterministic generator for sample points.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Rng {
+        Rng(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1) with 24 random bits (exactly representable in f32).
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    pub fn f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    pub fn u3(&mut self) -> [f32; 3] {
+        [self.f32(), self.f32(), self.f32()]
+    }
+}
+
+/// `|actual - expected| <= rel |expected| + abs`.
+pub fn close(actual: f64, expected: f64, rel: f64, abs: f64) -> bool {
+    (actual - expected).abs() <= rel * expected.abs() + abs
+}
+
+/// Assert [`close`], naming `what` and both values.
+#[track_caller]
+pub fn assert_close(actual: f64, expected: f64, rel: f64, abs: f64, what: &str) {
+    assert!(
+        close(actual, expected, rel, abs),
+        "{what}: actual {actual:.9e}, expected {expected:.9e} (rel err {:.3e}, tol rel {rel:.1e} + abs {abs:.1e})",
+        (actual - expected).abs() / expected.abs().max(1e-300)
+    );
+}
+
+/// Assert [`close`] channel by channel.
+#[track_caller]
+pub fn assert_close3(actual: [f32; 3], expected: [f64; 3], rel: f64, abs: f64, what: &str) {
+    for c in 0..3 {
+        assert_close(
+            f64::from(actual[c]),
+            expected[c],
+            rel,
+            abs,
+            &format!("{what} [channel {c}]"),
+        );
+    }
+}
