@@ -87,16 +87,36 @@ pub struct glint_sample_batch_args {
     pub roughness: *mut f32,
 }
 
-macro_rules! sized {
+/// The fields every batch argument struct shares.
+struct CommonArgs {
+    count: usize,
+    closure: *const glint_closure,
+    closures: *const *const glint_closure,
+    active: *const u8,
+    wo: [*const f32; 3],
+}
+
+macro_rules! batch_args {
     ($($t:ty),*) => {$(
         impl Sized32 for $t {
             fn struct_size(&self) -> u32 {
                 self.struct_size
             }
         }
+        impl $t {
+            fn common(&self) -> CommonArgs {
+                CommonArgs {
+                    count: self.count,
+                    closure: self.closure,
+                    closures: self.closures,
+                    active: self.active,
+                    wo: [self.wo_x, self.wo_y, self.wo_z],
+                }
+            }
+        }
     )*};
 }
-sized!(
+batch_args!(
     glint_eval_batch_args,
     glint_pdf_batch_args,
     glint_sample_batch_args
@@ -209,6 +229,23 @@ unsafe fn soa_out<'a>(
     }
 }
 
+/// The lanes' closures, active mask and `wo` of a batch call.
+///
+/// # Safety
+/// Pointers as documented on the argument structs.
+unsafe fn read_common<'a>(
+    a: &CommonArgs,
+) -> Result<(Lanes<'a>, Option<&'a [u8]>, Soa3<'a>), Error> {
+    let n = a.count;
+    // SAFETY: per the contract.
+    unsafe {
+        let lanes = lanes(a.closure, a.closures, n)?;
+        let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));
+        let wo = soa_in(a.wo[0], a.wo[1], a.wo[2], n, "wo")?;
+        Ok((lanes, active, wo))
+    }
+}
+
 /// Run `f` with the batch input for whichever closure source the lanes use.
 macro_rules! with_input {
     ($lanes:expr, $count:expr, $active:expr, $wo:expr, |$input:ident| $body:expr) => {
@@ -248,9 +285,7 @@ pub unsafe extern "C" fn glint_eval_batch(args: *const glint_eval_batch_args) ->
         let n = a.count;
         // SAFETY: the struct's pointers are valid for `count` elements per the contract.
         unsafe {
-            let lanes = lanes(a.closure, a.closures, n)?;
-            let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));
-            let wo = soa_in(a.wo_x, a.wo_y, a.wo_z, n, "wo")?;
+            let (lanes, active, wo) = read_common(&a.common())?;
             let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
             let out = EvalOutput {
                 value: soa_out(a.value_r, a.value_g, a.value_b, n, "value")?,
@@ -275,9 +310,7 @@ pub unsafe extern "C" fn glint_pdf_batch(args: *const glint_pdf_batch_args) -> g
         let n = a.count;
         // SAFETY: the struct's pointers are valid for `count` elements per the contract.
         unsafe {
-            let lanes = lanes(a.closure, a.closures, n)?;
-            let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));
-            let wo = soa_in(a.wo_x, a.wo_y, a.wo_z, n, "wo")?;
+            let (lanes, active, wo) = read_common(&a.common())?;
             let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
             let pdf = output(a.pdf, n, "pdf")?;
             with_input!(lanes, n, active, wo, |input| batch::pdf(&input, wi, pdf))
@@ -298,9 +331,7 @@ pub unsafe extern "C" fn glint_sample_batch(args: *const glint_sample_batch_args
         let n = a.count;
         // SAFETY: the struct's pointers are valid for `count` elements per the contract.
         unsafe {
-            let lanes = lanes(a.closure, a.closures, n)?;
-            let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));
-            let wo = soa_in(a.wo_x, a.wo_y, a.wo_z, n, "wo")?;
+            let (lanes, active, wo) = read_common(&a.common())?;
             let u = SampleRandoms {
                 u_lobe: input(a.u_lobe, n, "u_lobe")?,
                 u0: input(a.u0, n, "u0")?,
