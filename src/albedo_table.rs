@@ -25,11 +25,23 @@ use std::sync::OnceLock;
 const N: usize = 32;
 const STRATA: usize = 16;
 
-/// Stratified sample positions `((i + 0.5) / n, (j + 0.5) / n)`.
-fn strata(n: usize) -> impl Iterator<Item = (f32, f32)> {
+/// Stratified quadrature points `(u0, u1, weight)` on the unit square. With `warp`,
+/// denser toward `u0 = 1` (`u0 = 1 - (1 - v)^2`, weighted by its Jacobian `2 (1 - v)`),
+/// where the visible-normal samplers put the distribution's far tail.
+fn strata(n: usize, warp: bool) -> impl Iterator<Item = (f32, f32, f64)> {
     (0..n * n).map(move |k| {
         let (i, j) = (k / n, k % n);
-        ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32)
+        let v = (i as f64 + 0.5) / n as f64;
+        let (u0, jacobian) = if warp {
+            (1.0 - (1.0 - v) * (1.0 - v), 2.0 * (1.0 - v))
+        } else {
+            (v, 1.0)
+        };
+        (
+            u0 as f32,
+            (j as f32 + 0.5) / n as f32,
+            jacobian / (n * n) as f64,
+        )
     })
 }
 
@@ -87,13 +99,13 @@ impl ReflectionTable {
                 let wo = direction((mi as f32 / (N - 1) as f32).max(1e-3));
                 let g1 = dist.g1(wo);
                 let mut sum = [0.0f64; 3];
-                for (u0, u1) in strata(STRATA) {
+                for (u0, u1, q) in strata(STRATA, true) {
                     let m = dist.sample_visible(wo, u0, u1);
                     let wi = wo.reflect(m);
                     if wi.z <= 0.0 {
                         continue;
                     }
-                    let w = f64::from(dist.g2(wo, wi) / g1);
+                    let w = q * f64::from(dist.g2(wo, wi) / g1);
                     let c = f64::from(wo.dot(m).clamp(0.0, 1.0));
                     let s = (1.0 - c).powi(5);
                     sum[0] += w * (1.0 - s);
@@ -101,7 +113,7 @@ impl ReflectionTable {
                     sum[2] += w * c * (1.0 - c).powi(6);
                 }
                 for (table, total) in abc.iter_mut().zip(sum) {
-                    table[ri * N + mi] = (total / (STRATA * STRATA) as f64) as f32;
+                    table[ri * N + mi] = total as f32;
                 }
             }
         }
@@ -180,13 +192,13 @@ impl DielectricTable {
     fn integrate(dist: &Distribution<f32>, wo: Vec3<f32>, eta: f32) -> (f32, f32) {
         let g1 = dist.g1(wo);
         let (mut r, mut t) = (0.0f64, 0.0f64);
-        for (u0, u1) in strata(DIELECTRIC_STRATA) {
+        for (u0, u1, q) in strata(DIELECTRIC_STRATA, false) {
             let m = dist.sample_visible(wo, u0, u1);
             let c = wo.dot(m);
             let f = fresnel::dielectric(c, eta);
             let wr = wo.reflect(m);
             if wr.z > 0.0 {
-                r += f64::from(f * dist.g2(wo, wr) / g1);
+                r += q * f64::from(f * dist.g2(wo, wr) / g1);
             }
             // Snell on the microfacet (pbrt-v4 Refract), for c > 0.
             let sin2_t = (1.0 - c * c).max(0.0) / (eta * eta);
@@ -194,12 +206,11 @@ impl DielectricTable {
                 let cos_t = (1.0 - sin2_t).sqrt();
                 let wt = -wo * (1.0 / eta) + m * (c / eta - cos_t);
                 if wt.z < 0.0 {
-                    t += f64::from((1.0 - f) * dist.g2(wo, wt) / g1);
+                    t += q * f64::from((1.0 - f) * dist.g2(wo, wt) / g1);
                 }
             }
         }
-        let n = (DIELECTRIC_STRATA * DIELECTRIC_STRATA) as f64;
-        ((r / n) as f32, (t / n) as f32)
+        (r as f32, t as f32)
     }
 
     /// Reflected and transmitted albedo (importance transport) at `|mu|`, for the relative
