@@ -5,8 +5,8 @@
 //! Fresnel fitted as `F0 (1 - s) + F90 s - a c (1 - c)^6`
 //! (`FresnelModel::split_sum_fit`) makes the albedo `F0 A + F90 B - a C`, where
 //! `A = E[(1 - s) G2/G1]`, `B = E[s G2/G1]`, `C = E[c (1 - c)^6 G2/G1]` over visible
-//! normals `m` and reflected directions above the surface. Grid: 32 x 32 in
-//! `mu = cos theta_o` and `r = sqrt(alpha)`, 16 x 16 strata per cell.
+//! normals `m` and reflected directions above the surface. Grid: 32 (`mu = cos theta_o`)
+//! x 48 (`r = sqrt(alpha)` in [0, 1.5]), 16 x 16 strata per cell.
 //!
 //! Dielectric ([`DielectricTable`]): `E[F G2/G1]` (reflection) and `E[(1 - F) G2/G1]`
 //! (transmission, importance transport) over visible normals, on a 16 x 16 x 16 grid in
@@ -14,8 +14,10 @@
 //! reflectance) for `eta' > 1` and `eta' < 1` separately, 8 x 8 strata per cell;
 //! `t` beyond the grid (`eta'` above 39 or below 1/39) is clamped.
 //!
-//! Anisotropic lobes use `alpha = sqrt(alpha_x alpha_y)`. The tables' errors against
-//! numerical integration are measured in the tests.
+//! Anisotropic lobes use the root-mean-square alpha, an isotropic stand-in whose error
+//! grows with anisotropy (measured up to 39% at `anisotropic = 0.7`, roughness 1: the
+//! true albedo also depends on the azimuth of `wo`). The tables' errors against
+//! numerical integration are measured in the tests and by the verification harness.
 
 use crate::fresnel;
 use crate::math::{Lane, Vec3};
@@ -23,6 +25,10 @@ use crate::microfacet::{Distribution, NdfKind};
 use std::sync::OnceLock;
 
 const N: usize = 32;
+/// Rows of the reflection table in `r = sqrt(alpha)`, spanning [0, R_MAX] at the spacing of
+/// the `mu` columns, so anisotropic lobes' effective alpha (up to 2.25) stays on the grid.
+const NR: usize = 48;
+const R_MAX: f32 = 1.5;
 const STRATA: usize = 16;
 
 /// Stratified quadrature points `(u0, u1, weight)` on the unit square. With `warp`,
@@ -58,15 +64,24 @@ fn lerp<L: Lane>(a: L, b: L, t: L) -> L {
     a + (b - a) * t
 }
 
-/// The distribution `kind` at grid roughness `r` (isotropic).
+/// The isotropic distribution `kind` with `alpha = r^2` (not clamped to 1).
 fn grid_distribution(kind: NdfKind, r: f32) -> Distribution<f32> {
-    Distribution::from_roughness(kind, r, 0.0)
+    let alpha = (r * r).max(crate::microfacet::MIN_ALPHA);
+    Distribution {
+        kind,
+        alpha_x: alpha,
+        alpha_y: alpha,
+    }
 }
 
-/// The lookup roughness of a (possibly anisotropic) distribution.
+/// The lookup roughness of a (possibly anisotropic) distribution: `sqrt` of the
+/// root-mean-square alpha, which tracks the energy of anisotropic lobes better than the
+/// geometric mean (the wider axis dominates the shadowing of reflected directions).
 #[inline(always)]
 fn lookup_roughness<L: Lane>(dist: &Distribution<L>) -> L {
-    (dist.alpha_x * dist.alpha_y).sqrt().sqrt()
+    (L::splat(0.5) * (dist.alpha_x * dist.alpha_x + dist.alpha_y * dist.alpha_y))
+        .sqrt()
+        .sqrt()
 }
 
 /// `wo` at `cos theta = mu` in the xz-plane.
@@ -74,7 +89,7 @@ fn direction(mu: f32) -> Vec3<f32> {
     Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
 }
 
-/// The `A`, `B` and `C` tables of one distribution, `N x N`, indexed `[r][mu]`.
+/// The `A`, `B` and `C` tables of one distribution, `NR x N`, indexed `[r][mu]`.
 pub struct ReflectionTable {
     abc: [Vec<f32>; 3],
 }
@@ -91,9 +106,9 @@ impl ReflectionTable {
     }
 
     fn compute(kind: NdfKind) -> ReflectionTable {
-        let mut abc = [vec![0.0; N * N], vec![0.0; N * N], vec![0.0; N * N]];
-        for ri in 0..N {
-            let dist = grid_distribution(kind, ri as f32 / (N - 1) as f32);
+        let mut abc = [vec![0.0; NR * N], vec![0.0; NR * N], vec![0.0; NR * N]];
+        for ri in 0..NR {
+            let dist = grid_distribution(kind, R_MAX * ri as f32 / (NR - 1) as f32);
             for mi in 0..N {
                 // mu = 0 has no albedo of its own: use the limit from just above.
                 let wo = direction((mi as f32 / (N - 1) as f32).max(1e-3));
@@ -124,7 +139,7 @@ impl ReflectionTable {
     #[inline(always)]
     pub fn lookup<L: Lane>(&self, mu: L, dist: &Distribution<L>) -> [L; 3] {
         let (x0, fx) = grid(mu, N);
-        let (y0, fy) = grid(lookup_roughness(dist), N);
+        let (y0, fy) = grid(lookup_roughness(dist) * L::splat(1.0 / R_MAX), NR);
         let base = y0 * L::splat(N as f32) + x0;
         let row = L::splat(N as f32);
         self.abc.each_ref().map(|t| {

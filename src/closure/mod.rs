@@ -11,7 +11,7 @@ mod arena;
 pub use arena::Arena;
 
 use crate::error::{Error, Status};
-use crate::lobes::{LobeType, Transport, flags};
+use crate::lobes::{LobeType, Transport};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params;
 use crate::registry::{BUILTINS, Registry};
@@ -360,22 +360,12 @@ impl Closure {
         if !(pdf > 0.0 && pdf.is_finite()) {
             return Err(no_sample());
         }
-        let class = if s.delta {
-            flags::SPECULAR
-        } else {
-            l.lobe.flags() & (flags::DIFFUSE | flags::GLOSSY)
-        };
-        let side = if s.transmitted {
-            flags::TRANSMISSION
-        } else {
-            flags::REFLECTION
-        };
         Ok(SampleResult {
             wi,
             value,
             pdf,
             weight: value.map(|v| v / pdf),
-            flags: side | class,
+            flags: s.flags(l.lobe.flags()),
             lobe: k as u32,
             eta: s.eta,
             roughness: s.roughness,

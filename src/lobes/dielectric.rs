@@ -21,7 +21,7 @@
 //! reflected and transmitted single-scattering tables of `crate::albedo_table`.
 
 use super::conductor::{DISTRIBUTION_CHOICES, ndf_kind};
-use super::{Eval, Model, Params, Sample, Transport, flags};
+use super::{Eval, Model, Params, Sample, Transport, VerifyCase, flags};
 use crate::albedo_table::DielectricTable;
 use crate::fresnel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
@@ -58,7 +58,8 @@ fn refract<L: Lane>(w: Vec3<L>, n: Vec3<L>, eta: L) -> (Vec3<L>, L, L::Mask) {
     let sin2_t = (L::one() - cos_i * cos_i).max(L::zero()) / (eta * eta);
     let ok = sin2_t.lt(L::one());
     let cos_t = (L::one() - sin2_t).safe_sqrt();
-    let wt = -w * (L::one() / eta) + n * (cos_i / eta - cos_t);
+    // Normalized: with extreme eta the two terms nearly cancel.
+    let wt = (-w * (L::one() / eta) + n * (cos_i / eta - cos_t)).normalize();
     (wt, eta, ok)
 }
 
@@ -139,8 +140,44 @@ impl Model for Dielectric {
     ];
     const FLAGS: u32 = flags::REFLECTION | flags::TRANSMISSION | flags::GLOSSY | flags::SPECULAR;
     const RECIPROCAL: bool = false;
+    const VERIFY_CASES: &'static [VerifyCase] = &[
+        VerifyCase {
+            name: "ggx rough",
+            set: &[("roughness", 0.5)],
+        },
+        VerifyCase {
+            name: "beckmann water",
+            set: &[("distribution", 1.0), ("roughness", 0.3), ("eta", 1.33)],
+        },
+        VerifyCase {
+            name: "ggx eta below 1",
+            set: &[("roughness", 0.3), ("eta", 0.7)],
+        },
+        VerifyCase {
+            name: "ggx near-specular diamond",
+            set: &[("roughness", 0.06), ("eta", 2.4)],
+        },
+        VerifyCase {
+            name: "ggx roughest aniso",
+            set: &[("roughness", 1.0), ("anisotropic", 0.7)],
+        },
+        VerifyCase {
+            name: "smooth",
+            set: &[("roughness", 0.0)],
+        },
+        VerifyCase {
+            name: "index-matched",
+            set: &[("eta", 1.0)],
+        },
+    ];
 
     type Prepared<L: Lane> = Prepared<L>;
+
+    /// Isotropic: measured worst 3.3% against the sphere integral; anisotropy adds
+    /// the isotropic stand-in's error (see `crate::albedo_table`).
+    fn albedo_tolerance(params: &[f32]) -> f32 {
+        0.05 + 0.6 * params[ANISOTROPIC]
+    }
 
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         let roughness = params.float(ROUGHNESS);
@@ -211,12 +248,13 @@ impl Model for Dielectric {
         let t_scale = transmission_scale(etap, mode);
         let smooth_value = L::select(reflect, f, (L::one() - f) * t_scale);
         let smooth_pdf = L::select(reflect, f, L::one() - f);
-        let (rough_value, rough_pdf) = Self::rough_eval(p, wo, wi, wm, etap, reflect, mode);
+        // Rough: value and pdf through eval, so both agree to the last bit.
+        let e = Self::eval(p, wo, wi, mode);
         Sample {
             wi,
-            value: Rgb::splat(L::select(p.smooth, smooth_value, rough_value)),
-            pdf: L::select(p.smooth, smooth_pdf, rough_pdf),
-            valid,
+            value: Rgb::select(p.smooth, Rgb::splat(smooth_value), e.value),
+            pdf: L::select(p.smooth, smooth_pdf, e.pdf),
+            valid: valid & (p.smooth | e.pdf.gt(L::zero())),
             transmitted: !reflect,
             delta: p.smooth,
             eta: etap,

@@ -7,7 +7,7 @@
 //! Sampling is cosine-weighted (`pdf = cos theta_i / pi`), so the sample weight is
 //! exactly `color`. Albedo is the closed form `color`. One-sided: 0 below the surface.
 
-use super::{Eval, Model, Params, Sample, Transport, both_above, flags};
+use super::{Eval, Model, Params, Sample, Transport, VerifyCase, both_above, flags};
 use crate::math::{INV_PI, Lane, Mask, PI, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
 
@@ -31,8 +31,23 @@ impl Model for Lambert {
     )];
     const FLAGS: u32 = flags::REFLECTION | flags::DIFFUSE;
     const RECIPROCAL: bool = true;
+    const VERIFY_CASES: &'static [VerifyCase] = &[
+        VerifyCase {
+            name: "white",
+            set: &[("color", 1.0)],
+        },
+        VerifyCase {
+            name: "black",
+            set: &[("color", 0.0)],
+        },
+    ];
 
     type Prepared<L: Lane> = Prepared<L>;
+
+    /// Closed form: exact up to rounding.
+    fn albedo_tolerance(_params: &[f32]) -> f32 {
+        1e-5
+    }
 
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         Prepared {

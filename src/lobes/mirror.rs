@@ -9,7 +9,7 @@
 //! probability) and the SPECULAR flag. Albedo is exactly `F(cos_o)`. One-sided.
 
 use super::fresnel_params::{self, with_fresnel_params};
-use super::{Eval, Model, Params, Sample, Transport, flags};
+use super::{Eval, Model, Params, Sample, Transport, VerifyCase, flags};
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
@@ -28,8 +28,23 @@ impl Model for Mirror {
     const PARAMS: &'static [ParamSpec] = with_fresnel_params!(0;);
     const FLAGS: u32 = flags::REFLECTION | flags::SPECULAR;
     const RECIPROCAL: bool = true;
+    const VERIFY_CASES: &'static [VerifyCase] = &[
+        VerifyCase {
+            name: "conductor",
+            set: &[("fresnel", 1.0)],
+        },
+        VerifyCase {
+            name: "artistic",
+            set: &[("fresnel", 2.0)],
+        },
+    ];
 
     type Prepared<L: Lane> = Prepared<L>;
+
+    /// Closed form: exact up to rounding.
+    fn albedo_tolerance(_params: &[f32]) -> f32 {
+        1e-5
+    }
 
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         Prepared {

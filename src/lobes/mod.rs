@@ -89,6 +89,25 @@ impl<L: Lane> Sample<L> {
         self
     }
 
+    /// The `GLINT_FLAG_*` bits of a scalar sample of a lobe whose type flags are
+    /// `lobe_flags`: reflection or transmission, and specular or the lobe's class.
+    pub fn flags(&self, lobe_flags: u32) -> u32
+    where
+        L: Lane<Mask = bool>,
+    {
+        let side = if self.transmitted {
+            flags::TRANSMISSION
+        } else {
+            flags::REFLECTION
+        };
+        let class = if self.delta {
+            flags::SPECULAR
+        } else {
+            lobe_flags & (flags::DIFFUSE | flags::GLOSSY)
+        };
+        side | class
+    }
+
     /// `value / pdf`, 0 where the sample failed.
     #[inline(always)]
     pub fn weight(&self) -> Rgb<L> {
@@ -133,6 +152,12 @@ pub trait Model: Send + Sync + 'static {
     /// Whether `f(wo, wi) == f(wi, wo)` holds for the raw BSDF (radiance transport).
     const RECIPROCAL: bool;
 
+    /// Parameter sets the verification harness must cover, hardest corners included
+    /// (the defaults are always covered).
+    const VERIFY_CASES: &'static [VerifyCase] = &[];
+    /// Documented relative accuracy of `albedo` with these parameters (the harness checks it).
+    fn albedo_tolerance(params: &[f32]) -> f32;
+
     /// Parameters decoded once per call (Fresnel resolved, roughness mapped).
     type Prepared<L: Lane>;
 
@@ -162,6 +187,20 @@ pub trait LobeType: Send + Sync {
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32>;
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32>;
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32>;
+    /// Parameter sets the verification harness covers besides the defaults.
+    fn verify_cases(&self) -> &[VerifyCase] {
+        &[]
+    }
+    /// Documented relative accuracy of `albedo` with these parameters.
+    fn albedo_tolerance(&self, params: &[f32]) -> f32;
+}
+
+/// A named parameter set for the verification harness: the defaults with `set`
+/// overridden (enum choices by index).
+#[derive(Clone, Copy, Debug)]
+pub struct VerifyCase {
+    pub name: &'static str,
+    pub set: &'static [(&'static str, f32)],
 }
 
 /// The [`LobeType`] of a built-in [`Model`].
@@ -203,6 +242,12 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
         M::albedo(&M::prepare(Params::new(params)), wo, mode)
+    }
+    fn verify_cases(&self) -> &[VerifyCase] {
+        M::VERIFY_CASES
+    }
+    fn albedo_tolerance(&self, params: &[f32]) -> f32 {
+        M::albedo_tolerance(params)
     }
 }
 

@@ -1,0 +1,82 @@
+//! `glint-verify`: run the verification harness and write `target/verify/report.md`
+//! and `report.json`.
+//!
+//! Usage: `glint-verify [--all | --lobe NAME]... [--fast] [--out DIR]`
+//! (default: every registered lobe, full tier, `target/verify`). Exits 1 when a check fails.
+
+use glint::registry::Registry;
+use glint::verify::{self, Report, Tier};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let registry = Registry::with_builtins();
+    let mut tier = Tier::Full;
+    let mut names: Vec<String> = Vec::new();
+    let mut out = PathBuf::from("target/verify");
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--all" => names.clear(),
+            "--fast" => tier = Tier::Fast,
+            "--lobe" => match args.next() {
+                Some(n) => names.push(n),
+                None => return usage("--lobe needs a name"),
+            },
+            "--out" => match args.next() {
+                Some(d) => out = PathBuf::from(d),
+                None => return usage("--out needs a directory"),
+            },
+            "-h" | "--help" => return usage(""),
+            other => return usage(&format!("unknown argument {other}")),
+        }
+    }
+    let mut lobes = Vec::new();
+    if names.is_empty() {
+        lobes.extend(registry.iter());
+    } else {
+        for n in &names {
+            match registry.find(n).and_then(|id| registry.get(id)) {
+                Ok(l) => lobes.push(l),
+                Err(e) => return usage(&e.message),
+            }
+        }
+    }
+    let reports = lobes
+        .into_iter()
+        .map(|l| {
+            eprintln!("verifying {} ({tier:?} tier)...", l.name());
+            verify::verify_lobe(l, tier)
+        })
+        .collect();
+    let report = Report::new(tier, reports);
+    if let Err(e) = std::fs::create_dir_all(&out)
+        .and_then(|_| std::fs::write(out.join("report.md"), report.to_markdown()))
+        .and_then(|_| std::fs::write(out.join("report.json"), report.to_json().to_string()))
+    {
+        eprintln!(
+            "glint-verify: cannot write the report to {}: {e}",
+            out.display()
+        );
+        return ExitCode::from(2);
+    }
+    print!("{}", report.to_markdown());
+    println!(
+        "\nreport: {}/report.md, {}/report.json",
+        out.display(),
+        out.display()
+    );
+    if report.passed() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    }
+}
+
+fn usage(problem: &str) -> ExitCode {
+    if !problem.is_empty() {
+        eprintln!("glint-verify: {problem}");
+    }
+    eprintln!("usage: glint-verify [--all | --lobe NAME]... [--fast] [--out DIR]");
+    ExitCode::from(2)
+}

@@ -1,0 +1,570 @@
+//! The per-case checks of the harness (see the module docs of `verify`).
+
+use super::chi2::{self, Grid};
+use super::report::{CaseReport, Chi2Row, HardReport};
+use super::{Budget, ParamSet, Rng, corner_sets};
+use crate::batch::{self, BatchInput, EvalOutput, SampleOutput, SampleRandoms, Soa3, Soa3Mut};
+use crate::closure::Closure;
+use crate::lobes::{LobeType, Sample, Transport, flags};
+use crate::math::{Frame, Rgb, Vec3};
+use crate::params::{self, ParamKind};
+use crate::registry::Registry;
+
+/// `wo` at `cos theta`, at an azimuth that differs per call so anisotropy is exercised.
+fn direction(cos_theta: f32, phi: f32) -> Vec3<f32> {
+    let s = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    Vec3::new(s * phi.cos(), s * phi.sin(), cos_theta)
+}
+
+/// Uniform direction on the sphere.
+fn uniform_sphere(rng: &mut Rng) -> Vec3<f32> {
+    let z = 1.0 - 2.0 * rng.uniform();
+    direction(z, 2.0 * std::f32::consts::PI * rng.uniform())
+}
+
+/// Relative difference with a floor, so values that are both ~0 agree.
+fn rel_err(a: f64, b: f64, floor: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs()).max(floor)
+}
+
+fn rgb64(c: Rgb<f32>) -> [f64; 3] {
+    c.to_array().map(f64::from)
+}
+
+/// Whether `lobe` scatters below its surface (two-sided).
+fn transmits(lobe: &dyn LobeType) -> bool {
+    lobe.flags() & flags::TRANSMISSION != 0
+}
+
+/// The `wo` directions a check uses: the given cosines, mirrored below the surface
+/// for lobes that transmit.
+fn wo_set(lobe: &dyn LobeType, cosines: &[f32]) -> Vec<Vec3<f32>> {
+    let mut out: Vec<Vec3<f32>> = cosines
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| direction(c, 0.4 + 1.3 * i as f32))
+        .collect();
+    if transmits(lobe) {
+        out.extend(
+            cosines
+                .iter()
+                .enumerate()
+                .map(|(i, &c)| direction(-c, 2.1 + 0.9 * i as f32)),
+        );
+    }
+    out
+}
+
+pub(super) fn verify_case(
+    lobe: &'static dyn LobeType,
+    set: &ParamSet,
+    budget: &Budget,
+    rng: &mut Rng,
+) -> CaseReport {
+    let p = set.block.as_slice();
+    let mut report = CaseReport::new(set.name.clone());
+    for wo in wo_set(lobe, budget.chi2_cos_theta) {
+        chi2_and_consistency(lobe, p, wo, budget, rng, &mut report);
+    }
+    if lobe.reciprocal() {
+        report.reciprocity_max_err = Some(reciprocity(lobe, p, budget.reciprocity_pairs, rng));
+    }
+    for wo in wo_set(lobe, budget.energy_cos_theta) {
+        energy(lobe, p, wo, budget, rng, &mut report);
+    }
+    report.batch_max_err = scalar_vs_batch(lobe, p, budget.batch_lanes, rng);
+    report
+}
+
+/// Chi-square test and consistency of samples from `wo`.
+fn chi2_and_consistency(
+    lobe: &dyn LobeType,
+    p: &[f32],
+    wo: Vec3<f32>,
+    budget: &Budget,
+    rng: &mut Rng,
+    report: &mut CaseReport,
+) {
+    let grid: Grid = budget.chi2_grid;
+    let m = budget.chi2_samples;
+    let mut observed = vec![0u64; grid.cells()];
+    let (mut absorbed, mut delta) = (0usize, 0usize);
+    for i in 0..m {
+        let mode = if i % 2 == 0 {
+            Transport::Radiance
+        } else {
+            Transport::Importance
+        };
+        let s = lobe.sample(p, wo, rng.uniform3(), mode);
+        let check = i < budget.consistency_samples;
+        if !s.valid {
+            absorbed += 1;
+            if s.pdf != 0.0 || s.value.to_array() != [0.0; 3] {
+                report.flag_errors += 1;
+            }
+            continue;
+        }
+        if s.flags(lobe.flags()) & !lobe.flags() != 0 {
+            report.flag_errors += 1;
+        }
+        if s.delta {
+            delta += 1;
+        } else if mode == Transport::Radiance {
+            observed[grid.cell(s.wi)] += 1;
+        }
+        if check {
+            report.consistency_max_err = report
+                .consistency_max_err
+                .max(consistency(lobe, p, wo, &s, mode));
+        }
+    }
+    // Only radiance samples were binned (half of them); delta samples are not in the pdf.
+    let binned = m.div_ceil(2);
+    let delta_share = delta as f64 / m as f64;
+    let absorbed_share = absorbed as f64 / m as f64;
+    if delta_share >= 1.0 - absorbed_share - 1e-12 {
+        report
+            .chi2
+            .push(Chi2Row::not_applicable(wo.z, absorbed_share));
+        return;
+    }
+    let integral = chi2::integrate_cells(lobe, p, wo, Transport::Radiance, grid, m);
+    let total: f64 = integral.iter().map(|c| c[3]).sum();
+    let expected: Vec<f64> = integral.iter().map(|c| c[3] * binned as f64).collect();
+    let test = chi2::pearson(&observed, &expected);
+    // pdf integral against the share of samples that are neither absorbed nor delta.
+    let share = 1.0 - absorbed_share - delta_share;
+    let se = (share * (1.0 - share) / m as f64).sqrt();
+    let pdf_err = ((total - share).abs() - 3.0 * se).max(0.0);
+    report.pdf_integral_max_err = report.pdf_integral_max_err.max(pdf_err);
+    report.chi2.push(Chi2Row {
+        cos_theta_o: wo.z,
+        statistic: test.statistic,
+        dof: test.dof,
+        p_value: test.p_value,
+        absorbed: absorbed_share,
+        pdf_integral: total,
+    });
+}
+
+/// Largest relative mismatch between a sample and `eval` at its direction; delta
+/// samples must evaluate to 0 and carry a finite weight.
+fn consistency(
+    lobe: &dyn LobeType,
+    p: &[f32],
+    wo: Vec3<f32>,
+    s: &Sample<f32>,
+    mode: Transport,
+) -> f64 {
+    let e = lobe.eval(p, wo, s.wi, mode);
+    let weight_ok = s
+        .weight()
+        .to_array()
+        .iter()
+        .all(|w| w.is_finite() && *w >= 0.0);
+    if !weight_ok || s.pdf.is_nan() || s.pdf <= 0.0 {
+        return f64::INFINITY;
+    }
+    if s.delta {
+        return if e.pdf == 0.0 && e.value.to_array() == [0.0; 3] {
+            0.0
+        } else {
+            f64::INFINITY
+        };
+    }
+    let value_err = rgb64(s.value)
+        .iter()
+        .zip(rgb64(e.value))
+        .map(|(a, b)| rel_err(*a, b, 1e-12))
+        .fold(0.0, f64::max);
+    value_err.max(rel_err(f64::from(s.pdf), f64::from(e.pdf), 1e-12))
+}
+
+/// Largest relative asymmetry `|f(wo, wi) - f(wi, wo)|` over random pairs.
+fn reciprocity(lobe: &dyn LobeType, p: &[f32], pairs: usize, rng: &mut Rng) -> f64 {
+    let mut worst = 0.0f64;
+    for _ in 0..pairs {
+        let (wo, wi) = (uniform_sphere(rng), uniform_sphere(rng));
+        if wo.z.abs() < 1e-3 || wi.z.abs() < 1e-3 {
+            continue;
+        }
+        let forward = rgb64(lobe.eval(p, wo, wi, Transport::Radiance).value)
+            .map(|v| v / f64::from(wi.z.abs()));
+        let backward = rgb64(lobe.eval(p, wi, wo, Transport::Radiance).value)
+            .map(|v| v / f64::from(wo.z.abs()));
+        let scale = forward
+            .iter()
+            .chain(&backward)
+            .fold(0.0f64, |a, b| a.max(b.abs()));
+        for c in 0..3 {
+            worst = worst.max(rel_err(forward[c], backward[c], (scale * 1e-6).max(1e-12)));
+        }
+    }
+    worst
+}
+
+/// Mean and standard error per channel of `n` draws of `f`.
+fn mean_se(n: usize, mut f: impl FnMut() -> [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let (mut s1, mut s2) = ([0.0; 3], [0.0; 3]);
+    for _ in 0..n {
+        let x = f();
+        for c in 0..3 {
+            s1[c] += x[c];
+            s2[c] += x[c] * x[c];
+        }
+    }
+    let nf = n as f64;
+    let mean = s1.map(|s| s / nf);
+    let se = [0, 1, 2].map(|c| ((s2[c] / nf - mean[c] * mean[c]).max(0.0) / nf).sqrt());
+    (mean, se)
+}
+
+/// Directional albedo at `wo`: `<= 1` in importance transport, importance sampling
+/// against uniform sampling, and the lobe's `albedo` against the estimate.
+fn energy(
+    lobe: &dyn LobeType,
+    p: &[f32],
+    wo: Vec3<f32>,
+    budget: &Budget,
+    rng: &mut Rng,
+    report: &mut CaseReport,
+) {
+    let (n, grid) = (budget.energy_samples, budget.chi2_grid);
+    let weight = |rng: &mut Rng, mode| {
+        let s = lobe.sample(p, wo, rng.uniform3(), mode);
+        (rgb64(s.weight()), s.delta)
+    };
+    let mut any_delta = false;
+    let (mean, se) = mean_se(n, || {
+        let (w, d) = weight(rng, Transport::Importance);
+        any_delta |= d;
+        w
+    });
+    for c in 0..3 {
+        report.albedo_min = report.albedo_min.min(mean[c]);
+        report.albedo_max = report.albedo_max.max(mean[c]);
+        if mean[c] > 1.0 + 3.0 * se[c] + 1e-6 {
+            report.energy_violations += 1;
+        }
+    }
+    // Quadrature of eval over the sphere (uniform cells, adaptively refined) sees no
+    // delta lobe, so the cross-check needs none; nor can it resolve a narrow peak at the
+    // grid's pole, so it skips `wo` along the normal.
+    if !any_delta && wo.z.abs() < 0.999 {
+        let cells = chi2::integrate_cells(lobe, p, wo, Transport::Importance, grid, n);
+        for c in 0..3 {
+            let quadrature: f64 = cells.iter().map(|v| v[c]).sum();
+            if (quadrature - mean[c]).abs() > 4.0 * se[c] + 1e-3 * quadrature.abs() + 1e-5 {
+                report.uniform_mismatches += 1;
+            }
+        }
+    }
+    // The lobe's own albedo, in radiance transport (what hosts use).
+    let (radiance, rse) = mean_se(n, || weight(rng, Transport::Radiance).0);
+    let claimed = rgb64(lobe.albedo(p, wo, Transport::Radiance));
+    let tol = f64::from(lobe.albedo_tolerance(p));
+    for c in 0..3 {
+        let err = (claimed[c] - radiance[c]).abs();
+        report.albedo_max_rel_err = report
+            .albedo_max_rel_err
+            .max(((err - 3.0 * rse[c]).max(0.0)) / radiance[c].max(1e-3));
+        if err > tol * radiance[c].max(claimed[c]) + 3.0 * rse[c] + 1e-4 {
+            report.albedo_failures += 1;
+        }
+    }
+}
+
+/// The batch entry points against the scalar closure calls, on a closure holding
+/// only this lobe; every seventh lane inactive.
+fn scalar_vs_batch(lobe: &'static dyn LobeType, p: &[f32], lanes: usize, rng: &mut Rng) -> f64 {
+    let mut registry = Registry::with_builtins();
+    let type_id = registry
+        .find(lobe.name())
+        .or_else(|_| registry.register(lobe))
+        .expect("register");
+    let mut closure = Closure::new(None, Transport::Radiance);
+    closure
+        .add_lobe(&registry, type_id, [1.0; 3], Frame::IDENTITY, Some(p))
+        .expect("verified parameters are valid");
+    closure.finish().expect("finish");
+    let dirs = |rng: &mut Rng| -> [Vec<f32>; 3] {
+        let v: Vec<Vec3<f32>> = (0..lanes).map(|_| uniform_sphere(rng)).collect();
+        [
+            v.iter().map(|d| d.x).collect(),
+            v.iter().map(|d| d.y).collect(),
+            v.iter().map(|d| d.z).collect(),
+        ]
+    };
+    let (wo, wi) = (dirs(rng), dirs(rng));
+    let u: [Vec<f32>; 3] = [0, 1, 2].map(|_| (0..lanes).map(|_| rng.uniform()).collect());
+    let active: Vec<u8> = (0..lanes).map(|i| u8::from(i % 7 != 6)).collect();
+    let input = BatchInput {
+        count: lanes,
+        closures: &closure,
+        active: Some(&active),
+        wo: Soa3 {
+            x: &wo[0],
+            y: &wo[1],
+            z: &wo[2],
+        },
+    };
+    let wi_soa = Soa3 {
+        x: &wi[0],
+        y: &wi[1],
+        z: &wi[2],
+    };
+    let mut value = [vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]];
+    let (mut pdf, mut pdf_rev, mut pdf_only) =
+        (vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]);
+    let [vr, vg, vb] = &mut value;
+    batch::eval(
+        &input,
+        wi_soa,
+        EvalOutput {
+            value: Soa3Mut {
+                x: vr,
+                y: vg,
+                z: vb,
+            },
+            pdf: &mut pdf,
+            pdf_reverse: Some(&mut pdf_rev),
+        },
+    )
+    .expect("valid batch");
+    batch::pdf(&input, wi_soa, &mut pdf_only).expect("valid batch");
+    let mut s_wi = [vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]];
+    let mut s_w = [vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]];
+    let mut s_pdf = vec![0.0; lanes];
+    let mut s_flags = vec![0u32; lanes];
+    let [wx, wy, wz] = &mut s_wi;
+    let [wr, wg, wb] = &mut s_w;
+    batch::sample(
+        &input,
+        SampleRandoms {
+            u_lobe: &u[0],
+            u0: &u[1],
+            u1: &u[2],
+        },
+        SampleOutput {
+            wi: Soa3Mut {
+                x: wx,
+                y: wy,
+                z: wz,
+            },
+            pdf: &mut s_pdf,
+            weight: Soa3Mut {
+                x: wr,
+                y: wg,
+                z: wb,
+            },
+            value: None,
+            flags: Some(&mut s_flags),
+            lobe: None,
+            eta: None,
+            roughness: None,
+        },
+    )
+    .expect("valid batch");
+    let mut worst = 0.0f64;
+    let mut cmp = |a: f32, b: f32| worst = worst.max(rel_err(f64::from(a), f64::from(b), 1e-12));
+    for i in (0..lanes).filter(|&i| active[i] != 0) {
+        // The scalar C entry points normalize exactly as the batch does.
+        let o = Vec3::try_unit(wo[0][i], wo[1][i], wo[2][i], "wo").expect("unit");
+        let w = Vec3::try_unit(wi[0][i], wi[1][i], wi[2][i], "wi").expect("unit");
+        let e = closure.eval(o, w).expect("finished closure");
+        for (c, v) in e.value.to_array().into_iter().enumerate() {
+            cmp(value[c][i], v);
+        }
+        cmp(pdf[i], e.pdf);
+        cmp(pdf_rev[i], e.pdf_reverse);
+        cmp(pdf_only[i], e.pdf);
+        match closure.sample(o, [u[0][i], u[1][i], u[2][i]]) {
+            Ok(s) => {
+                cmp(s_wi[0][i], s.wi.x);
+                cmp(s_wi[1][i], s.wi.y);
+                cmp(s_wi[2][i], s.wi.z);
+                cmp(s_pdf[i], s.pdf);
+                for (c, v) in s.weight.to_array().into_iter().enumerate() {
+                    cmp(s_w[c][i], v);
+                }
+                cmp(s_flags[i] as f32, s.flags as f32);
+            }
+            Err(_) => cmp(s_pdf[i], 0.0),
+        }
+    }
+    worst
+}
+
+/// Directions the hard cases pair up: poles, grazing angles above and below, the
+/// horizon, and a few ordinary ones.
+fn hard_directions() -> Vec<Vec3<f32>> {
+    let mut d = vec![Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0)];
+    for (i, c) in [1e-4f32, 1e-3, 0.01, 0.05, -1e-4, -0.05]
+        .into_iter()
+        .enumerate()
+    {
+        d.push(direction(c, 0.3 + i as f32));
+    }
+    d.push(Vec3::new(1.0, 0.0, 0.0));
+    d.push(Vec3::new(0.6, 0.8, 0.0));
+    for (i, c) in [0.9f32, 0.5, -0.5, -0.9].into_iter().enumerate() {
+        d.push(direction(c, 1.7 + 2.0 * i as f32));
+    }
+    d
+}
+
+/// Random parameters over the whole schema: floats and colors uniform in their range
+/// (log-uniform for ranges over more than two decades), enums uniform.
+fn random_block(lobe: &dyn LobeType, rng: &mut Rng) -> Vec<f32> {
+    let specs = lobe.params();
+    let mut block = vec![0.0; params::block_size(specs)];
+    for (i, spec) in specs.iter().enumerate() {
+        let offset = params::offset_of(specs, i);
+        for slot in &mut block[offset..offset + spec.kind.size()] {
+            *slot = match spec.kind {
+                ParamKind::Enum(choices) => {
+                    ((rng.uniform() * choices.len() as f32) as usize).min(choices.len() - 1) as f32
+                }
+                _ if spec.min > 0.0 && spec.max / spec.min > 100.0 => (spec.min.ln()
+                    + rng.uniform() * (spec.max / spec.min).ln())
+                .exp()
+                .clamp(spec.min, spec.max),
+                _ => spec.min + rng.uniform() * (spec.max - spec.min),
+            };
+        }
+    }
+    block
+}
+
+/// Everything a lobe returns at the hard cases: never NaN, Inf or negative, never a
+/// weight with a zero pdf.
+pub(super) fn hard_cases(
+    lobe: &'static dyn LobeType,
+    sets: &[ParamSet],
+    budget: &Budget,
+    rng: &mut Rng,
+) -> HardReport {
+    let mut blocks: Vec<Vec<f32>> = sets.iter().map(|s| s.block.clone()).collect();
+    blocks.extend(corner_sets(lobe));
+    blocks.extend((0..budget.random_param_sets).map(|_| random_block(lobe, rng)));
+    let dirs = hard_directions();
+    let one_minus = 1.0 - f32::EPSILON / 2.0;
+    let fixed_u = [
+        [0.0f32; 3],
+        [one_minus; 3],
+        [0.5; 3],
+        [0.0, one_minus, 0.5],
+        [one_minus, 0.0, 1e-7],
+    ];
+    let mut report = HardReport::default();
+    let mut fail = |report: &mut HardReport, what: String| {
+        report.failures += 1;
+        if report.first_failure.is_none() {
+            report.first_failure = Some(what);
+        }
+    };
+    let bad = |x: f32| !x.is_finite() || x < 0.0;
+    for block in &blocks {
+        let p = block.as_slice();
+        for &mode in &[Transport::Radiance, Transport::Importance] {
+            for &wo in &dirs {
+                let mut wis = dirs.clone();
+                wis.extend([
+                    wo,
+                    -wo,
+                    Vec3::new(-wo.x, -wo.y, wo.z),
+                    Vec3::new(wo.x, wo.y, -wo.z),
+                ]);
+                for wi in wis {
+                    let e = lobe.eval(p, wo, wi, mode);
+                    report.evaluations += 1;
+                    if e.value.to_array().into_iter().any(bad) || bad(e.pdf) {
+                        fail(
+                            &mut report,
+                            format!("eval {p:?} wo {wo:?} wi {wi:?}: {e:?}"),
+                        );
+                    }
+                }
+                let randoms = fixed_u
+                    .iter()
+                    .copied()
+                    .chain((0..4).map(|_| rng.uniform3()));
+                for u in randoms.collect::<Vec<_>>() {
+                    let s = lobe.sample(p, wo, u, mode);
+                    report.evaluations += 1;
+                    let weight = s.weight().to_array();
+                    let broken = if s.valid {
+                        bad(s.pdf)
+                            || s.pdf == 0.0
+                            || s.value.to_array().into_iter().chain(weight).any(bad)
+                            || (s.wi.length_squared() - 1.0).abs() > 1e-3
+                    } else {
+                        s.pdf != 0.0 || s.value.to_array() != [0.0; 3]
+                    };
+                    if broken {
+                        fail(
+                            &mut report,
+                            format!("sample {p:?} wo {wo:?} u {u:?}: {s:?}"),
+                        );
+                    }
+                }
+                let a = lobe.albedo(p, wo, mode);
+                report.evaluations += 1;
+                if a.to_array().into_iter().any(bad) {
+                    fail(&mut report, format!("albedo {p:?} wo {wo:?}: {a:?}"));
+                }
+            }
+        }
+    }
+    boundary_inputs(lobe, &sets[0].block, &mut report, &mut fail);
+    report
+}
+
+/// Unnormalized and near-zero-length directions through the checks the C boundary
+/// applies (`Vec3::try_unit`) and then a closure: either a clean error or finite results.
+fn boundary_inputs(
+    lobe: &'static dyn LobeType,
+    p: &[f32],
+    report: &mut HardReport,
+    fail: &mut impl FnMut(&mut HardReport, String),
+) {
+    let mut registry = Registry::with_builtins();
+    let type_id = registry
+        .find(lobe.name())
+        .or_else(|_| registry.register(lobe))
+        .expect("register");
+    let mut closure = Closure::new(None, Transport::Radiance);
+    closure
+        .add_lobe(&registry, type_id, [1.0; 3], Frame::IDENTITY, Some(p))
+        .expect("valid");
+    closure.finish().expect("finish");
+    let base = [
+        (0.3f32, -0.2f32, 0.9f32),
+        (0.0, 0.0, 1.0),
+        (1.0, 0.0, 1e-6),
+        (-0.4, 0.1, -0.8),
+    ];
+    let scales = [1e-30f32, 1e-20, 1e-6, 3.7, 1e20, 1e30, 1e-45];
+    for &(x, y, z) in &base {
+        for &k in &scales {
+            let Ok(wo) = Vec3::try_unit(x * k, y * k, z * k, "wo") else {
+                continue;
+            };
+            for &(a, b, c) in &base {
+                let Ok(wi) = Vec3::try_unit(a / k, b / k, c / k, "wi") else {
+                    continue;
+                };
+                report.evaluations += 1;
+                match closure.eval(wo, wi) {
+                    Ok(e)
+                        if e.value
+                            .to_array()
+                            .iter()
+                            .chain(&[e.pdf, e.pdf_reverse])
+                            .all(|v| v.is_finite() && *v >= 0.0) => {}
+                    other => fail(report, format!("closure eval at scale {k}: {other:?}")),
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,314 @@
+//! Harness results, pass/fail decisions, and the Markdown and JSON reports.
+
+use super::{BATCH_TOLERANCE, CHI2_ALPHA, CONSISTENCY_TOLERANCE, RECIPROCITY_TOLERANCE, Tier};
+use serde_json::{Value, json};
+
+/// Allowed error of the pdf's integral over the sphere beyond 3 standard errors of the
+/// absorbed share (the adaptive cell integration's own error).
+pub const PDF_INTEGRAL_TOLERANCE: f64 = 2e-3;
+
+/// One chi-square test.
+#[derive(Clone, Debug)]
+pub struct Chi2Row {
+    pub cos_theta_o: f32,
+    pub statistic: f64,
+    pub dof: usize,
+    /// NaN when the test does not apply (every sample was a delta).
+    pub p_value: f64,
+    /// Share of samples that failed (absorbed).
+    pub absorbed: f64,
+    pub pdf_integral: f64,
+}
+
+impl Chi2Row {
+    pub fn not_applicable(cos_theta_o: f32, absorbed: f64) -> Chi2Row {
+        Chi2Row {
+            cos_theta_o,
+            statistic: 0.0,
+            dof: 0,
+            p_value: f64::NAN,
+            absorbed,
+            pdf_integral: 0.0,
+        }
+    }
+    pub fn applies(&self) -> bool {
+        !self.p_value.is_nan()
+    }
+}
+
+/// Results of one parameter set of one lobe.
+#[derive(Clone, Debug)]
+pub struct CaseReport {
+    pub case: String,
+    pub chi2: Vec<Chi2Row>,
+    pub consistency_max_err: f64,
+    pub pdf_integral_max_err: f64,
+    pub flag_errors: u64,
+    pub reciprocity_max_err: Option<f64>,
+    pub albedo_min: f64,
+    pub albedo_max: f64,
+    pub energy_violations: u64,
+    pub uniform_mismatches: u64,
+    pub albedo_max_rel_err: f64,
+    pub albedo_failures: u64,
+    pub batch_max_err: f64,
+}
+
+impl CaseReport {
+    pub fn new(case: String) -> CaseReport {
+        CaseReport {
+            case,
+            chi2: Vec::new(),
+            consistency_max_err: 0.0,
+            pdf_integral_max_err: 0.0,
+            flag_errors: 0,
+            reciprocity_max_err: None,
+            albedo_min: f64::INFINITY,
+            albedo_max: f64::NEG_INFINITY,
+            energy_violations: 0,
+            uniform_mismatches: 0,
+            albedo_max_rel_err: 0.0,
+            albedo_failures: 0,
+            batch_max_err: 0.0,
+        }
+    }
+
+    /// Smallest chi-square p-value (NaN when no test applied).
+    pub fn chi2_p_min(&self) -> f64 {
+        self.chi2
+            .iter()
+            .filter(|r| r.applies())
+            .map(|r| r.p_value)
+            .fold(f64::NAN, f64::min)
+    }
+
+    /// The checks this case fails, each with the measured value.
+    pub fn failures(&self, alpha_per_test: f64) -> Vec<String> {
+        let mut out = Vec::new();
+        for r in self
+            .chi2
+            .iter()
+            .filter(|r| r.applies() && r.p_value < alpha_per_test)
+        {
+            out.push(format!(
+                "chi-square: p = {:.3e} < {alpha_per_test:.3e} at cos_o = {} (X^2 = {:.1}, dof {})",
+                r.p_value, r.cos_theta_o, r.statistic, r.dof
+            ));
+        }
+        if self.consistency_max_err > CONSISTENCY_TOLERANCE {
+            out.push(format!(
+                "consistency: sample vs eval error {:.3e}",
+                self.consistency_max_err
+            ));
+        }
+        if self.pdf_integral_max_err > PDF_INTEGRAL_TOLERANCE {
+            out.push(format!(
+                "consistency: pdf integral off by {:.3e}",
+                self.pdf_integral_max_err
+            ));
+        }
+        if self.flag_errors > 0 {
+            out.push(format!(
+                "consistency: {} samples with bad flags or failed-sample data",
+                self.flag_errors
+            ));
+        }
+        if let Some(e) = self
+            .reciprocity_max_err
+            .filter(|e| *e > RECIPROCITY_TOLERANCE)
+        {
+            out.push(format!("reciprocity: error {e:.3e}"));
+        }
+        if self.energy_violations > 0 {
+            out.push(format!(
+                "energy: albedo above 1 (max {:.4})",
+                self.albedo_max
+            ));
+        }
+        if self.uniform_mismatches > 0 {
+            out.push(format!(
+                "energy: importance and uniform estimates disagree ({} channels)",
+                self.uniform_mismatches
+            ));
+        }
+        if self.albedo_failures > 0 {
+            out.push(format!(
+                "energy: albedo(wo) off its documented tolerance (relative error {:.3e})",
+                self.albedo_max_rel_err
+            ));
+        }
+        if self.batch_max_err > BATCH_TOLERANCE {
+            out.push(format!(
+                "batch: differs from scalar by {:.3e}",
+                self.batch_max_err
+            ));
+        }
+        out
+    }
+}
+
+/// The hard-case sweep of one lobe.
+#[derive(Clone, Debug, Default)]
+pub struct HardReport {
+    pub evaluations: u64,
+    pub failures: u64,
+    pub first_failure: Option<String>,
+}
+
+/// Everything verified about one lobe type.
+#[derive(Clone, Debug)]
+pub struct LobeReport {
+    pub lobe: String,
+    pub reciprocal: bool,
+    pub cases: Vec<CaseReport>,
+    pub hard: HardReport,
+}
+
+/// A whole run.
+#[derive(Clone, Debug)]
+pub struct Report {
+    pub tier: Tier,
+    pub lobes: Vec<LobeReport>,
+    /// Number of chi-square tests in the run.
+    pub chi2_tests: usize,
+    /// Sidak-corrected significance of each: `1 - (1 - CHI2_ALPHA)^(1 / chi2_tests)`.
+    pub alpha_per_test: f64,
+}
+
+impl Report {
+    pub fn new(tier: Tier, lobes: Vec<LobeReport>) -> Report {
+        let chi2_tests = lobes
+            .iter()
+            .flat_map(|l| &l.cases)
+            .flat_map(|c| &c.chi2)
+            .filter(|r| r.applies())
+            .count()
+            .max(1);
+        Report {
+            tier,
+            lobes,
+            chi2_tests,
+            alpha_per_test: 1.0 - (1.0 - CHI2_ALPHA).powf(1.0 / chi2_tests as f64),
+        }
+    }
+
+    /// Every failed check, as "lobe / case: what".
+    pub fn failures(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for l in &self.lobes {
+            for c in &l.cases {
+                for f in c.failures(self.alpha_per_test) {
+                    out.push(format!("{} / {}: {f}", l.lobe, c.case));
+                }
+            }
+            if l.hard.failures > 0 {
+                out.push(format!(
+                    "{}: {} hard-case failures, first: {}",
+                    l.lobe,
+                    l.hard.failures,
+                    l.hard.first_failure.as_deref().unwrap_or("")
+                ));
+            }
+        }
+        out
+    }
+
+    pub fn passed(&self) -> bool {
+        self.failures().is_empty()
+    }
+
+    pub fn to_markdown(&self) -> String {
+        let mut s = format!(
+            "# Glint verification report\n\nTier: {:?}. Chi-square tests: {}, each at significance \
+             {:.3e} (Sidak for an overall {CHI2_ALPHA}). Tolerances: consistency {CONSISTENCY_TOLERANCE:e}, \
+             reciprocity {RECIPROCITY_TOLERANCE:e}, batch {BATCH_TOLERANCE:e}, pdf integral \
+             {PDF_INTEGRAL_TOLERANCE:e} beyond 3 standard errors.\n\n\
+             | lobe | parameter set | chi2 min p | consistency max err | pdf integral err | reciprocity err | albedo min | albedo max | albedo(wo) rel err | batch max err | result |\n\
+             | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+            self.tier, self.chi2_tests, self.alpha_per_test
+        );
+        for l in &self.lobes {
+            for c in &l.cases {
+                let p = c.chi2_p_min();
+                let fails = c.failures(self.alpha_per_test);
+                s += &format!(
+                    "| {} | {} | {} | {:.2e} | {:.2e} | {} | {:.4} | {:.4} | {:.2e} | {:.1e} | {} |\n",
+                    l.lobe,
+                    c.case,
+                    if p.is_nan() {
+                        "n/a (delta)".into()
+                    } else {
+                        format!("{p:.3}")
+                    },
+                    c.consistency_max_err,
+                    c.pdf_integral_max_err,
+                    c.reciprocity_max_err
+                        .map_or("not reciprocal".into(), |e| format!("{e:.2e}")),
+                    c.albedo_min,
+                    c.albedo_max,
+                    c.albedo_max_rel_err,
+                    c.batch_max_err,
+                    if fails.is_empty() {
+                        "pass".to_string()
+                    } else {
+                        fails.join("; ")
+                    }
+                );
+            }
+        }
+        s += "\n| lobe | hard-case evaluations | failures |\n| --- | --- | --- |\n";
+        for l in &self.lobes {
+            s += &format!(
+                "| {} | {} | {} |\n",
+                l.lobe, l.hard.evaluations, l.hard.failures
+            );
+        }
+        let failures = self.failures();
+        s += &if failures.is_empty() {
+            "\nAll checks passed.\n".to_string()
+        } else {
+            format!("\n## Failures\n\n- {}\n", failures.join("\n- "))
+        };
+        s
+    }
+
+    pub fn to_json(&self) -> Value {
+        let num = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
+        json!({
+            "tier": format!("{:?}", self.tier),
+            "chi2_tests": self.chi2_tests,
+            "alpha_per_test": self.alpha_per_test,
+            "passed": self.passed(),
+            "lobes": self.lobes.iter().map(|l| json!({
+                "lobe": l.lobe,
+                "reciprocal": l.reciprocal,
+                "hard_case_evaluations": l.hard.evaluations,
+                "hard_case_failures": l.hard.failures,
+                "hard_case_first_failure": l.hard.first_failure,
+                "cases": l.cases.iter().map(|c| json!({
+                    "case": c.case,
+                    "chi2": c.chi2.iter().map(|r| json!({
+                        "cos_theta_o": r.cos_theta_o,
+                        "statistic": r.statistic,
+                        "dof": r.dof,
+                        "p_value": num(r.p_value),
+                        "absorbed": r.absorbed,
+                        "pdf_integral": r.pdf_integral,
+                    })).collect::<Vec<_>>(),
+                    "consistency_max_err": num(c.consistency_max_err),
+                    "pdf_integral_max_err": num(c.pdf_integral_max_err),
+                    "flag_errors": c.flag_errors,
+                    "reciprocity_max_err": c.reciprocity_max_err.map(num),
+                    "albedo_min": num(c.albedo_min),
+                    "albedo_max": num(c.albedo_max),
+                    "energy_violations": c.energy_violations,
+                    "uniform_mismatches": c.uniform_mismatches,
+                    "albedo_max_rel_err": num(c.albedo_max_rel_err),
+                    "albedo_failures": c.albedo_failures,
+                    "batch_max_err": num(c.batch_max_err),
+                    "failures": c.failures(self.alpha_per_test),
+                })).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        })
+    }
+}
