@@ -9,9 +9,10 @@
 //! x 48 (`r = sqrt(alpha)` in [0, 1.5]), 16 x 16 strata per cell.
 //!
 //! Dielectric ([`DielectricTable`]): `E[F G2/G1]` (reflection) and `E[(1 - F) G2/G1]`
-//! (transmission, importance transport) over visible normals, on a 16 x 16 x 16 grid in
-//! `|mu|`, `r` and `t = |eta' - 1| / (eta' + 1)` (so `t^2` is the normal-incidence
-//! reflectance) for `eta' > 1` and `eta' < 1` separately, 8 x 8 strata per cell;
+//! (transmission, importance transport) over visible normals, on a 17 x 17 x 17 grid in
+//! `|mu|` (remapped so the critical angle is a node), `r` and `t = |eta' - 1| / (eta' + 1)`
+//! (so `t^2` is the normal-incidence reflectance) for `eta' > 1` and `eta' < 1`
+//! separately, 8 x 8 strata per cell;
 //! `t` beyond the grid (`eta'` above 39 or below 1/39) is clamped.
 //!
 //! Anisotropic lobes use the root-mean-square alpha, an isotropic stand-in whose error
@@ -153,13 +154,40 @@ impl ReflectionTable {
     }
 }
 
-const DN: usize = 16;
+/// Points per axis; odd, so the critical angle (x = 1/2, see [`critical_coordinate`]) is a node.
+const DN: usize = 17;
 const DIELECTRIC_STRATA: usize = 8;
 /// Largest `t = |eta' - 1| / (eta' + 1)` on the grid (`eta' = 39`).
 const T_MAX: f32 = 0.95;
 
+/// The `mu` axis coordinate of the dielectric table: `mu` itself for `eta' > 1`; for
+/// `eta' < 1`, `mu` remapped so the critical angle `mu_c = sqrt(1 - eta'^2)` sits at 1/2,
+/// keeping the total-internal-reflection edge on a grid node for every IOR.
+#[inline(always)]
+fn critical_coordinate<L: Lane>(mu: L, eta: L) -> L {
+    let mu_c = (L::one() - eta * eta).safe_sqrt();
+    let below = L::splat(0.5) * mu.safe_div(mu_c);
+    let above = L::splat(0.5) + L::splat(0.5) * (mu - mu_c).safe_div(L::one() - mu_c);
+    let remapped = L::select(mu.lt(mu_c), below, above);
+    L::select(eta.lt(L::one()), remapped, mu)
+}
+
+/// Inverse of [`critical_coordinate`].
+fn critical_mu(x: f32, eta: f32) -> f32 {
+    if eta >= 1.0 {
+        return x;
+    }
+    let mu_c = (1.0 - eta * eta).max(0.0).sqrt();
+    if x < 0.5 {
+        2.0 * x * mu_c
+    } else {
+        mu_c + (2.0 * x - 1.0) * (1.0 - mu_c)
+    }
+}
+
 /// Reflected and transmitted single-scattering albedo of the rough dielectric, indexed
-/// `[side][t][r][mu]` with side 0 for `eta' > 1`, 1 for `eta' < 1`.
+/// `[side][t][r][x]` with side 0 for `eta' > 1`, 1 for `eta' < 1`, and `x` the
+/// [`critical_coordinate`] of `mu`.
 pub struct DielectricTable {
     reflect: Vec<f32>,
     transmit: Vec<f32>,
@@ -191,8 +219,8 @@ impl DielectricTable {
                 for ri in 0..DN {
                     let dist = grid_distribution(kind, ri as f32 / (DN - 1) as f32);
                     for mi in 0..DN {
-                        let wo = direction((mi as f32 / (DN - 1) as f32).max(1e-3));
-                        let (r, tr) = Self::integrate(&dist, wo, eta);
+                        let mu = critical_mu(mi as f32 / (DN - 1) as f32, eta);
+                        let (r, tr) = Self::integrate(&dist, direction(mu.max(1e-3)), eta);
                         let index = ((side * DN + ti) * DN + ri) * DN + mi;
                         reflect[index] = r;
                         transmit[index] = tr;
@@ -234,7 +262,7 @@ impl DielectricTable {
     pub fn lookup<L: Lane>(&self, mu: L, dist: &Distribution<L>, eta: L) -> (L, L) {
         let t = (eta - L::one()).abs() / (eta + L::one());
         let side = L::select(eta.lt(L::one()), L::one(), L::zero());
-        let (x0, fx) = grid(mu.abs(), DN);
+        let (x0, fx) = grid(critical_coordinate(mu.abs(), eta), DN);
         let (y0, fy) = grid(lookup_roughness(dist), DN);
         let (z0, fz) = grid(t * L::splat(1.0 / T_MAX), DN);
         let n = L::splat(DN as f32);

@@ -17,8 +17,11 @@
 //!   1e-4 of 1 the interface is index-matched and treated as smooth (the rough
 //!   half-vector is undefined when `wi = -wo`).
 //!
-//! Albedo: exact `F + (1 - F) / eta'^2` (radiance) when smooth; when rough, the
-//! reflected and transmitted single-scattering tables of `crate::albedo_table`.
+//! Albedo: exact `F + (1 - F) / eta'^2` (radiance) when smooth and, as the closer
+//! approximation, for narrow lobes (`alpha < 0.03`); otherwise the reflected and
+//! transmitted single-scattering tables of `crate::albedo_table`. Within about
+//! `2 alpha` of the critical angle (inside the denser medium) both can err by more
+//! than the documented tolerance: the albedo steps there.
 
 use super::conductor::{DISTRIBUTION_CHOICES, ndf_kind};
 use super::{Eval, Model, Params, Sample, Transport, VerifyCase, flags};
@@ -29,6 +32,9 @@ use crate::microfacet::Distribution;
 use crate::params::{ParamSpec, offset_of};
 
 pub struct Dielectric;
+
+/// Below this alpha the rough albedo uses the smooth interface's exact albedo.
+const NARROW_ALPHA: f32 = 0.03;
 
 /// `|eta - 1|` below which the interface is index-matched (smooth pass-through).
 pub const INDEX_MATCHED: f32 = 1e-4;
@@ -269,7 +275,14 @@ impl Model for Dielectric {
         let f = fresnel::dielectric(cos_o, p.eta);
         let smooth = f + (L::one() - f) * scale;
         let (r, t) = DielectricTable::get(p.dist.kind).lookup(cos_o, &p.dist, etap);
-        let albedo = L::select(p.smooth, smooth, r + t * scale);
+        // Narrow lobes: the exact smooth albedo is closer than the table, whose grid
+        // cannot follow the total-internal-reflection edge sharper than its spacing.
+        let narrow = p
+            .dist
+            .alpha_x
+            .max(p.dist.alpha_y)
+            .lt(L::splat(NARROW_ALPHA));
+        let albedo = L::select(p.smooth | narrow, smooth, r + t * scale);
         Rgb::splat(L::select(cos_o.eq(L::zero()), L::zero(), albedo))
     }
 }
