@@ -10,7 +10,8 @@
 //!
 //! Dielectric ([`DielectricTable`]): `E[F G2/G1]` (reflection) and `E[(1 - F) G2/G1]`
 //! (transmission, importance transport) over visible normals, on a 17 x 17 x 17 grid in
-//! `|mu|` (remapped so the critical angle is a node), `r` and `t = |eta' - 1| / (eta' + 1)`
+//! `|mu|` (remapped so the critical angle is a node), `r` in [0, 1.5] and
+//! `t = |eta' - 1| / (eta' + 1)`
 //! (so `t^2` is the normal-incidence reflectance) for `eta' > 1` and `eta' < 1`
 //! separately, 8 x 8 strata per cell;
 //! `t` beyond the grid (`eta'` above 39 or below 1/39) is clamped.
@@ -217,7 +218,7 @@ impl DielectricTable {
                     1.0 / eta_above
                 };
                 for ri in 0..DN {
-                    let dist = grid_distribution(kind, ri as f32 / (DN - 1) as f32);
+                    let dist = grid_distribution(kind, R_MAX * ri as f32 / (DN - 1) as f32);
                     for mi in 0..DN {
                         let mu = critical_mu(mi as f32 / (DN - 1) as f32, eta);
                         let (r, tr) = Self::integrate(&dist, direction(mu.max(1e-3)), eta);
@@ -263,7 +264,7 @@ impl DielectricTable {
         let t = (eta - L::one()).abs() / (eta + L::one());
         let side = L::select(eta.lt(L::one()), L::one(), L::zero());
         let (x0, fx) = grid(critical_coordinate(mu.abs(), eta), DN);
-        let (y0, fy) = grid(lookup_roughness(dist), DN);
+        let (y0, fy) = grid(lookup_roughness(dist) * L::splat(1.0 / R_MAX), DN);
         let (z0, fz) = grid(t * L::splat(1.0 / T_MAX), DN);
         let n = L::splat(DN as f32);
         let base = ((side * n + z0) * n + y0) * n + x0;

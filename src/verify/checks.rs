@@ -128,7 +128,11 @@ fn chi2_and_consistency(
             .push(Chi2Row::not_applicable(wo.z, absorbed_share));
         return;
     }
-    let integral = chi2::integrate_cells(lobe, p, wo, Transport::Radiance, grid, m);
+    // Cells whose counts are far off their expectation get a finer quadrature.
+    let integral = chi2::integrate_cells(lobe, p, wo, Transport::Radiance, grid, m, |cell, v| {
+        let (o, e) = (observed[cell] as f64, v[3] * binned as f64);
+        (o - e) * (o - e) > 9.0 * e.max(1.0)
+    });
     let total: f64 = integral.iter().map(|c| c[3]).sum();
     let expected: Vec<f64> = integral.iter().map(|c| c[3] * binned as f64).collect();
     let test = chi2::pearson(&observed, &expected);
@@ -203,6 +207,10 @@ fn reciprocity(lobe: &dyn LobeType, p: &[f32], pairs: usize, rng: &mut Rng) -> f
     worst
 }
 
+/// The energy cross-check's quadrature resolves the sphere as finely as a chi-square
+/// test of this many samples would, whatever the tier's sample count.
+const QUADRATURE_COUNTS: usize = 1_000_000;
+
 /// Mean and standard error per channel of `n` draws of `f`.
 fn mean_se(n: usize, mut f: impl FnMut() -> [f64; 3]) -> ([f64; 3], [f64; 3]) {
     let (mut s1, mut s2) = ([0.0; 3], [0.0; 3]);
@@ -235,9 +243,19 @@ fn energy(
         (rgb64(s.weight()), s.delta)
     };
     let mut any_delta = false;
+    // Per-cell sums of the importance-sampling weights (and their squares), to find
+    // the cells where the quadrature below needs refining.
+    let mut per_cell = vec![[0.0f64; 2]; grid.cells()];
     let (mean, se) = mean_se(n, || {
-        let (w, d) = weight(rng, Transport::Importance);
-        any_delta |= d;
+        let s = lobe.sample(p, wo, rng.uniform3(), Transport::Importance);
+        any_delta |= s.delta;
+        let w = rgb64(s.weight());
+        if s.valid && !s.delta {
+            let cell = &mut per_cell[grid.cell(s.wi)];
+            let lum = w.iter().sum::<f64>();
+            cell[0] += lum;
+            cell[1] += lum * lum;
+        }
         w
     });
     for c in 0..3 {
@@ -251,7 +269,21 @@ fn energy(
     // delta lobe, so the cross-check needs none; nor can it resolve a narrow peak at the
     // grid's pole, so it skips `wo` along the normal.
     if !any_delta && wo.z.abs() < 0.999 {
-        let cells = chi2::integrate_cells(lobe, p, wo, Transport::Importance, grid, n);
+        let nf = n as f64;
+        let cells = chi2::integrate_cells(
+            lobe,
+            p,
+            wo,
+            Transport::Importance,
+            grid,
+            QUADRATURE_COUNTS,
+            |cell, v| {
+                let [sum, sum2] = per_cell[cell];
+                let estimate = sum / nf;
+                let se = (sum2 / nf / nf).sqrt();
+                (estimate - (v[0] + v[1] + v[2])).abs() > 5.0 * se + 1e-5
+            },
+        );
         for c in 0..3 {
             let quadrature: f64 = cells.iter().map(|v| v[c]).sum();
             if (quadrature - mean[c]).abs() > 4.0 * se[c] + 1e-3 * quadrature.abs() + 1e-5 {
@@ -270,6 +302,12 @@ fn energy(
             .max(((err - 3.0 * rse[c]).max(0.0)) / radiance[c].max(1e-3));
         if err > tol * radiance[c].max(claimed[c]) + 3.0 * rse[c] + 1e-4 {
             report.albedo_failures += 1;
+            report.albedo_failure_detail.get_or_insert_with(|| {
+                format!(
+                    "cos_o {}: albedo {:.4} vs estimate {:.4} +- {:.1e}",
+                    wo.z, claimed[c], radiance[c], rse[c]
+                )
+            });
         }
     }
 }

@@ -93,7 +93,7 @@ impl Tier {
                 reciprocity_pairs: 100_000,
                 energy_samples: 200_000,
                 energy_cos_theta: &[1.0, 0.9, 0.7, 0.5, 0.3, 0.1, 0.02],
-                random_param_sets: 1_000,
+                random_param_sets: 1_300,
                 batch_lanes: 4096,
             },
         }

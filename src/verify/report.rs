@@ -51,6 +51,8 @@ pub struct CaseReport {
     pub uniform_mismatches: u64,
     pub albedo_max_rel_err: f64,
     pub albedo_failures: u64,
+    /// The first albedo failure: where, what was claimed, what was estimated.
+    pub albedo_failure_detail: Option<String>,
     pub batch_max_err: f64,
 }
 
@@ -69,6 +71,7 @@ impl CaseReport {
             uniform_mismatches: 0,
             albedo_max_rel_err: 0.0,
             albedo_failures: 0,
+            albedo_failure_detail: None,
             batch_max_err: 0.0,
         }
     }
@@ -102,9 +105,18 @@ impl CaseReport {
             ));
         }
         if self.pdf_integral_max_err > PDF_INTEGRAL_TOLERANCE {
+            let worst = self.chi2.iter().filter(|r| r.applies()).max_by(|a, b| {
+                (a.pdf_integral + a.absorbed - 1.0)
+                    .abs()
+                    .total_cmp(&(b.pdf_integral + b.absorbed - 1.0).abs())
+            });
             out.push(format!(
-                "consistency: pdf integral off by {:.3e}",
-                self.pdf_integral_max_err
+                "consistency: pdf integral off by {:.3e} beyond 3 standard errors{}",
+                self.pdf_integral_max_err,
+                worst.map_or(String::new(), |r| format!(
+                    " (cos_o {}: integral {:.5}, absorbed {:.5})",
+                    r.cos_theta_o, r.pdf_integral, r.absorbed
+                ))
             ));
         }
         if self.flag_errors > 0 {
@@ -133,8 +145,9 @@ impl CaseReport {
         }
         if self.albedo_failures > 0 {
             out.push(format!(
-                "energy: albedo(wo) off its documented tolerance (relative error {:.3e})",
-                self.albedo_max_rel_err
+                "energy: albedo(wo) off its documented tolerance (relative error {:.3e}; {})",
+                self.albedo_max_rel_err,
+                self.albedo_failure_detail.as_deref().unwrap_or("")
             ));
         }
         if self.batch_max_err > BATCH_TOLERANCE {
