@@ -312,19 +312,26 @@ fn energy(
     }
 }
 
-/// The batch entry points against the scalar closure calls, on a closure holding
-/// only this lobe; every seventh lane inactive.
-fn scalar_vs_batch(lobe: &'static dyn LobeType, p: &[f32], lanes: usize, rng: &mut Rng) -> f64 {
+/// A finished closure holding only `lobe` with parameters `p` (registered on the fly
+/// when it is not a built-in, as plugin lobes will be).
+fn single_lobe_closure(lobe: &'static dyn LobeType, p: &[f32]) -> Closure {
     let mut registry = Registry::with_builtins();
     let type_id = registry
         .find(lobe.name())
         .or_else(|_| registry.register(lobe))
-        .expect("register");
+        .expect("a lobe type with a new name registers");
     let mut closure = Closure::new(None, Transport::Radiance);
     closure
         .add_lobe(&registry, type_id, [1.0; 3], Frame::IDENTITY, Some(p))
         .expect("verified parameters are valid");
-    closure.finish().expect("finish");
+    closure.finish().expect("a new closure finishes");
+    closure
+}
+
+/// The batch entry points against the scalar closure calls, on a closure holding
+/// only this lobe; every seventh lane inactive.
+fn scalar_vs_batch(lobe: &'static dyn LobeType, p: &[f32], lanes: usize, rng: &mut Rng) -> f64 {
+    let closure = single_lobe_closure(lobe, p);
     let dirs = |rng: &mut Rng| -> [Vec<f32>; 3] {
         let v: Vec<Vec3<f32>> = (0..lanes).map(|_| uniform_sphere(rng)).collect();
         [
@@ -566,16 +573,7 @@ fn boundary_inputs(
     report: &mut HardReport,
     fail: &mut impl FnMut(&mut HardReport, String),
 ) {
-    let mut registry = Registry::with_builtins();
-    let type_id = registry
-        .find(lobe.name())
-        .or_else(|_| registry.register(lobe))
-        .expect("register");
-    let mut closure = Closure::new(None, Transport::Radiance);
-    closure
-        .add_lobe(&registry, type_id, [1.0; 3], Frame::IDENTITY, Some(p))
-        .expect("valid");
-    closure.finish().expect("finish");
+    let closure = single_lobe_closure(lobe, p);
     let base = [
         (0.3f32, -0.2f32, 0.9f32),
         (0.0, 0.0, 1.0),
