@@ -425,7 +425,7 @@ glint_status glint_closure_finish(struct glint_closure *closure);
  Build and finish a whole closure from the JSON description `json_text` (see the README).
 
  # Safety
- Handles are NULL or live; `json` NULL or NUL-terminated; `wo` NULL or readable;
+ Handles are NULL or live; `json_text` NULL or NUL-terminated; `wo` NULL or readable;
  `out` NULL or writable.
  */
 glint_status glint_closure_from_json(const struct glint_runtime *runtime, struct glint_arena *arena, const char *json_text, const struct glint_vec3 *wo, struct glint_closure **out);

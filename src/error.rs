@@ -1,6 +1,7 @@
 //! Status codes and errors shared by the Rust API and the C ABI.
 
 use std::borrow::Cow;
+use std::ffi::CStr;
 use std::fmt;
 
 /// Why a call failed. The numeric values are the C API's `GLINT_*` status codes.
@@ -39,21 +40,24 @@ impl Status {
         Status::Panic,
     ];
 
-    pub fn description(self) -> &'static str {
+    /// A static description, NUL-terminated so the C API can hand it out as is.
+    pub fn description(self) -> &'static CStr {
         match self {
-            Status::Ok => "success",
-            Status::NullPointer => "a required pointer argument is NULL",
-            Status::InvalidArgument => "invalid argument (NaN, infinite, zero-length or malformed)",
-            Status::OutOfRange => "a parameter is outside its valid range",
-            Status::UnknownName => "unknown name (lobe type, parameter, choice or config key)",
-            Status::Parse => "malformed input text (JSON or config)",
-            Status::StructSize => "struct_size is smaller than the structure this library needs",
-            Status::ArenaFull => "the arena has no room for another closure",
-            Status::ClosureFull => "the closure already holds GLINT_MAX_LOBES lobes",
-            Status::InvalidState => "the object is not in a state that allows this call",
-            Status::Unsupported => "not supported by this build or machine",
-            Status::NoSample => "no sample: the lobe cannot scatter from this direction",
-            Status::Panic => "internal error (a panic was caught at the API boundary)",
+            Status::Ok => c"success",
+            Status::NullPointer => c"a required pointer argument is NULL",
+            Status::InvalidArgument => {
+                c"invalid argument (NaN, infinite, zero-length or malformed)"
+            }
+            Status::OutOfRange => c"a value is outside its valid range",
+            Status::UnknownName => c"unknown name (lobe type, parameter, choice or config key)",
+            Status::Parse => c"malformed input text (JSON or config)",
+            Status::StructSize => c"struct_size is smaller than the structure this library needs",
+            Status::ArenaFull => c"the arena has no room for another closure",
+            Status::ClosureFull => c"the closure has no room for another lobe",
+            Status::InvalidState => c"the object is not in a state that allows this call",
+            Status::Unsupported => c"not supported by this build or machine",
+            Status::NoSample => c"no sample: the closure cannot scatter from this direction",
+            Status::Panic => c"internal error (a panic was caught at the API boundary)",
         }
     }
 }

@@ -152,6 +152,43 @@ fn transport(flags: u32) -> Result<Transport, Error> {
     }
 }
 
+/// The checked arguments both closure constructors share: the output handle (set to
+/// NULL until a closure is placed), the runtime, the arena and the optional `wo`.
+///
+/// # Safety
+/// Each pointer is NULL or valid as documented on the constructors.
+unsafe fn constructor_args<'a>(
+    runtime: *const glint_runtime,
+    arena: *mut glint_arena,
+    wo: *const glint_vec3,
+    out: *mut *mut glint_closure,
+) -> Result<ConstructorArgs<'a>, Error> {
+    // SAFETY: per the contract.
+    let out = unsafe { deref_mut(out, "out") }?;
+    *out = std::ptr::null_mut();
+    // SAFETY: per the contract.
+    let runtime = unsafe { deref(runtime, "runtime") }?;
+    // SAFETY: per the contract.
+    let arena = unsafe { deref_mut(arena, "arena") }?;
+    // SAFETY: per the contract.
+    let wo = unsafe { wo.as_ref() }
+        .map(|w| vec3_in(*w, "wo"))
+        .transpose()?;
+    Ok(ConstructorArgs {
+        runtime,
+        arena,
+        wo,
+        out,
+    })
+}
+
+struct ConstructorArgs<'a> {
+    runtime: &'a glint_runtime,
+    arena: &'a mut glint_arena,
+    wo: Option<Vec3<f32>>,
+    out: &'a mut *mut glint_closure,
+}
+
 /// Store a closure in the arena and hand out its handle.
 fn place(
     runtime: &glint_runtime,
@@ -180,17 +217,13 @@ pub unsafe extern "C" fn glint_closure_begin(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { deref_mut(out, "out") }?;
-        *out = std::ptr::null_mut();
-        // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
-        // SAFETY: per the contract.
-        let arena = unsafe { deref_mut(arena, "arena") }?;
-        // SAFETY: per the contract.
-        let wo = unsafe { wo.as_ref() }
-            .map(|w| vec3_in(*w, "wo"))
-            .transpose()?;
-        place(rt, arena, Closure::new(wo, transport(flags)?), out)
+        let a = unsafe { constructor_args(runtime, arena, wo, out) }?;
+        place(
+            a.runtime,
+            a.arena,
+            Closure::new(a.wo, transport(flags)?),
+            a.out,
+        )
     })
 }
 
@@ -268,7 +301,7 @@ pub unsafe extern "C" fn glint_closure_finish(closure: *mut glint_closure) -> gl
 /// Build and finish a whole closure from the JSON description `json_text` (see the README).
 ///
 /// # Safety
-/// Handles are NULL or live; `json` NULL or NUL-terminated; `wo` NULL or readable;
+/// Handles are NULL or live; `json_text` NULL or NUL-terminated; `wo` NULL or readable;
 /// `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_closure_from_json(
@@ -280,20 +313,11 @@ pub unsafe extern "C" fn glint_closure_from_json(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { deref_mut(out, "out") }?;
-        *out = std::ptr::null_mut();
-        // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
-        // SAFETY: per the contract.
-        let arena = unsafe { deref_mut(arena, "arena") }?;
+        let a = unsafe { constructor_args(runtime, arena, wo, out) }?;
         // SAFETY: per the contract.
         let text = unsafe { c_str(json_text, "json_text") }?;
-        // SAFETY: per the contract.
-        let wo = unsafe { wo.as_ref() }
-            .map(|w| vec3_in(*w, "wo"))
-            .transpose()?;
-        let closure = json::closure_from_json(&rt.runtime.registry, text, wo)?;
-        place(rt, arena, closure, out)
+        let closure = json::closure_from_json(&a.runtime.runtime.registry, text, a.wo)?;
+        place(a.runtime, a.arena, closure, a.out)
     })
 }
 

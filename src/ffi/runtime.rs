@@ -112,25 +112,10 @@ pub extern "C" fn glint_version() -> u32 {
 /// A static description of a status code (never NULL).
 #[unsafe(no_mangle)]
 pub extern "C" fn glint_status_string(status: glint_status) -> *const c_char {
-    let s: &'static CStr = match Status::ALL.get(status as usize) {
-        Some(Status::Ok) => c"success",
-        Some(Status::NullPointer) => c"a required pointer argument is NULL",
-        Some(Status::InvalidArgument) => {
-            c"invalid argument (NaN, infinite, zero-length or malformed)"
-        }
-        Some(Status::OutOfRange) => c"a value is outside its valid range",
-        Some(Status::UnknownName) => c"unknown name (lobe type, parameter, choice or config key)",
-        Some(Status::Parse) => c"malformed input text (JSON or config)",
-        Some(Status::StructSize) => c"struct_size is smaller than the structure this library needs",
-        Some(Status::ArenaFull) => c"the arena has no room for another closure",
-        Some(Status::ClosureFull) => c"the closure has no room for another lobe",
-        Some(Status::InvalidState) => c"the object is not in a state that allows this call",
-        Some(Status::Unsupported) => c"not supported by this build or machine",
-        Some(Status::NoSample) => c"no sample: the closure cannot scatter from this direction",
-        Some(Status::Panic) => c"internal error (a panic was caught at the API boundary)",
-        None => c"unknown status code",
-    };
-    s.as_ptr()
+    Status::ALL
+        .get(status as usize)
+        .map_or(c"unknown status code", |s| s.description())
+        .as_ptr()
 }
 
 /// The message of the last failed call on this thread ("" if none). Valid until the
