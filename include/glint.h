@@ -169,6 +169,26 @@ typedef struct glint_sample_batch_args {
 } glint_sample_batch_args;
 
 /*
+ Arguments of `glint_albedo_batch`.
+ */
+typedef struct glint_albedo_batch_args {
+  /*
+   Set by the caller to `sizeof(glint_albedo_batch_args)`.
+   */
+  uint32_t struct_size;
+  size_t count;
+  const struct glint_closure *closure;
+  const struct glint_closure *const *closures;
+  const uint8_t *active;
+  const float *wo_x;
+  const float *wo_y;
+  const float *wo_z;
+  float *albedo_r;
+  float *albedo_g;
+  float *albedo_b;
+} glint_albedo_batch_args;
+
+/*
  A 3-vector (world-space direction or normal).
  */
 typedef struct glint_vec3 {
@@ -365,6 +385,14 @@ glint_status glint_pdf_batch(const struct glint_pdf_batch_args *args);
  `args` is NULL or valid; its pointers as documented on `glint_sample_batch_args`.
  */
 glint_status glint_sample_batch(const struct glint_sample_batch_args *args);
+
+/*
+ Directional albedo (`glint_albedo`) over SoA arrays.
+
+ # Safety
+ `args` is NULL or valid; its pointers as documented on `glint_albedo_batch_args`.
+ */
+glint_status glint_albedo_batch(const struct glint_albedo_batch_args *args);
 
 /*
  Create an arena with room for `capacity` closures.

@@ -144,15 +144,25 @@ impl ReflectionTable {
         let (y0, fy) = grid(lookup_roughness(dist) * L::splat(1.0 / R_MAX), NR);
         let base = y0 * L::splat(N as f32) + x0;
         let row = L::splat(N as f32);
-        self.abc.each_ref().map(|t| {
-            let at = |offset: L| L::gather(t, base + offset);
-            lerp(
-                lerp(at(L::zero()), at(L::one()), fx),
-                lerp(at(row), at(row + L::one()), fx),
-                fy,
-            )
-        })
+        let [a, b, c] = &self.abc;
+        [
+            bilerp(a, base, L::one(), row, fx, fy),
+            bilerp(b, base, L::one(), row, fx, fy),
+            bilerp(c, base, L::one(), row, fx, fy),
+        ]
     }
+}
+
+/// Bilinear interpolation in `table` from index `base`, with `dx` and `dy` the index
+/// steps of the two axes.
+#[inline(always)]
+fn bilerp<L: Lane>(table: &[f32], base: L, dx: L, dy: L, fx: L, fy: L) -> L {
+    let (p00, p01) = (L::gather(table, base), L::gather(table, base + dx));
+    let (p10, p11) = (
+        L::gather(table, base + dy),
+        L::gather(table, base + dy + dx),
+    );
+    lerp(lerp(p00, p01, fx), lerp(p10, p11, fx), fy)
 }
 
 /// Points per axis; odd, so the critical angle (x = 1/2, see [`critical_coordinate`]) is a node.
@@ -268,22 +278,15 @@ impl DielectricTable {
         let (z0, fz) = grid(t * L::splat(1.0 / T_MAX), DN);
         let n = L::splat(DN as f32);
         let base = ((side * n + z0) * n + y0) * n + x0;
-        let read = |table: &[f32]| {
-            let at = |dz: f32, dy: f32, dx: f32| {
-                L::gather(
-                    table,
-                    base + L::splat(dz * (DN * DN) as f32 + dy * DN as f32 + dx),
-                )
-            };
-            let plane = |dz: f32| {
-                lerp(
-                    lerp(at(dz, 0.0, 0.0), at(dz, 0.0, 1.0), fx),
-                    lerp(at(dz, 1.0, 0.0), at(dz, 1.0, 1.0), fx),
-                    fy,
-                )
-            };
-            lerp(plane(0.0), plane(1.0), fz)
-        };
-        (read(&self.reflect), read(&self.transmit))
+        let dz = L::splat((DN * DN) as f32);
+        let (r0, r1) = (
+            bilerp(&self.reflect, base, L::one(), n, fx, fy),
+            bilerp(&self.reflect, base + dz, L::one(), n, fx, fy),
+        );
+        let (t0, t1) = (
+            bilerp(&self.transmit, base, L::one(), n, fx, fy),
+            bilerp(&self.transmit, base + dz, L::one(), n, fx, fy),
+        );
+        (lerp(r0, r1, fz), lerp(t0, t1, fz))
     }
 }

@@ -80,6 +80,7 @@ pub enum FresnelModel<L> {
 
 impl<L: Lane> FresnelModel<L> {
     /// The Gulbrandsen parameterization resolved once to an exact conductor.
+    #[inline(always)]
     pub fn artistic(reflectivity: Rgb<L>, edge_tint: Rgb<L>) -> Self {
         let (er, kr) = gulbrandsen_ior(reflectivity.r, edge_tint.r);
         let (eg, kg) = gulbrandsen_ior(reflectivity.g, edge_tint.g);
@@ -93,8 +94,16 @@ impl<L: Lane> FresnelModel<L> {
     #[inline(always)]
     pub fn eval(&self, cos_theta: L) -> Rgb<L> {
         match self {
-            FresnelModel::Schlick { f0, f90 } => f0.zip(*f90, |a, b| schlick(a, b, cos_theta)),
-            FresnelModel::Conductor { eta, k } => eta.zip(*k, |n, k| conductor(cos_theta, n, k)),
+            FresnelModel::Schlick { f0, f90 } => f0.zip(
+                *f90,
+                #[inline(always)]
+                |a, b| schlick(a, b, cos_theta),
+            ),
+            FresnelModel::Conductor { eta, k } => eta.zip(
+                *k,
+                #[inline(always)]
+                |n, k| conductor(cos_theta, n, k),
+            ),
         }
     }
 
@@ -102,6 +111,7 @@ impl<L: Lane> FresnelModel<L> {
     /// with `s = (1 - c)^5`, used by the albedo tables. Exact for Schlick (`a = 0`); for
     /// conductors the Lazanyi-Schlick term is fitted to the exact curve at `c = 1/7`,
     /// where `c (1 - c)^6` peaks (Hoffman 2019, "Fresnel Equations Considered Harmful").
+    #[inline(always)]
     pub fn split_sum_fit(&self) -> (Rgb<L>, Rgb<L>, Rgb<L>) {
         match self {
             FresnelModel::Schlick { f0, f90 } => (*f0, *f90, Rgb::zero()),
@@ -112,9 +122,11 @@ impl<L: Lane> FresnelModel<L> {
                 );
                 let f0 = self.eval(L::one());
                 let exact = self.eval(L::splat(C));
-                let a = f0.zip(exact, |f0, f| {
-                    (schlick(f0, L::one(), L::splat(C)) - f) / peak
-                });
+                let a = f0.zip(
+                    exact,
+                    #[inline(always)]
+                    |f0, f| (schlick(f0, L::one(), L::splat(C)) - f) / peak,
+                );
                 (f0, Rgb::splat(L::one()), a)
             }
         }

@@ -15,6 +15,7 @@ pub mod microfacet;
 pub mod params;
 pub mod registry;
 pub mod runtime;
+pub mod simd;
 pub mod verify;
 
 pub use closure::{Arena, Closure, EvalResult, SampleResult};

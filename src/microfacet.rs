@@ -33,6 +33,7 @@ impl<L: Lane> Distribution<L> {
     /// From the artist parameters `roughness` and `anisotropic` in [0, 1]:
     /// `alpha = roughness^2`, stretched along the tangent by `1 / sqrt(1 - 0.9 anisotropic)`
     /// (Burley 2012's mapping).
+    #[inline(always)]
     pub fn from_roughness(kind: NdfKind, roughness: L, anisotropic: L) -> Self {
         let alpha = roughness.clamp(L::zero(), L::one()).sqr();
         let aspect = (L::one() - L::splat(0.9) * anisotropic.clamp(L::zero(), L::one())).sqrt();
@@ -127,6 +128,7 @@ impl<L: Lane> Distribution<L> {
     }
 
     /// Heitz 2018, "Sampling the GGX Distribution of Visible Normals", listing 1.
+    #[inline(always)]
     fn sample_visible_ggx(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
         let (ax, ay) = (self.alpha_x, self.alpha_y);
         let vh = Vec3::new(ax * w.x, ay * w.y, w.z).normalize();
@@ -151,6 +153,7 @@ impl<L: Lane> Distribution<L> {
     /// Heitz and d'Eon 2014 ("Importance Sampling Microfacet-Based BSDFs using the
     /// Distribution of Visible Normals"): stretch, sample the slope of the unit-roughness
     /// distribution, rotate and unstretch.
+    #[inline(always)]
     fn sample_visible_beckmann(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
         let (ax, ay) = (self.alpha_x, self.alpha_y);
         let ws = Vec3::new(ax * w.x, ay * w.y, w.z).normalize();
@@ -168,6 +171,7 @@ impl<L: Lane> Distribution<L> {
 /// Slopes of visible normals of the unit-roughness Beckmann distribution seen from
 /// `cos_theta` (pbrt-v3 `BeckmannSample11`: a fitted initial guess refined by a
 /// safeguarded Newton-bisection on the inverse CDF).
+#[inline(always)]
 fn beckmann_sample_slopes<L: Lane>(cos_theta: L, u0: L, u1: L) -> (L, L) {
     let u0c = u0.clamp(L::splat(1e-6), L::splat(1.0 - 1e-7));
     let u1c = u1.clamp(L::splat(1e-6), L::splat(1.0 - 1e-7));

@@ -127,6 +127,16 @@ pub const fn block_size(specs: &[ParamSpec]) -> usize {
     offset_of(specs, specs.len())
 }
 
+/// Whether two blocks of the same schema make the same enumerated choices.
+pub fn same_choices(specs: &[ParamSpec], a: &[f32], b: &[f32]) -> bool {
+    let mut offset = 0;
+    specs.iter().all(|s| {
+        let at = offset;
+        offset += s.kind.size();
+        !matches!(s.kind, ParamKind::Enum(_)) || a[at] == b[at]
+    })
+}
+
 /// Write the schema's defaults into `out` (which must hold `block_size(specs)` slots).
 pub fn write_defaults(specs: &[ParamSpec], out: &mut [f32]) {
     let mut offset = 0;

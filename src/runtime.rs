@@ -1,31 +1,44 @@
-//! The runtime: the root object that owns the lobe registry and the settings.
-//! Read-only after setup, so it can be shared by every thread.
+//! The runtime: the root object that owns the lobe registry, the settings, the
+//! kernel set and the worker threads. Read-only after setup, so it can be shared by
+//! every thread.
 
+use crate::batch::{Exec, Threads};
 use crate::error::{Error, Status};
 use crate::registry::Registry;
+use crate::simd::{Isa, Kernels};
 
 /// Which kernel set batch calls use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Isa {
-    /// The best the machine supports.
+pub enum IsaSetting {
+    /// The widest ISA the machine supports.
     Auto,
-    Scalar,
+    /// This one; creating the runtime fails when the machine lacks it.
+    Only(Isa),
 }
 
 /// Settings from the configuration string.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
-    pub isa: Isa,
+    pub isa: IsaSetting,
+    /// Threads for large batches: 0 = rayon's global pool (one per core), 1 = the
+    /// calling thread only, N = a pool of N threads owned by the runtime.
+    pub threads: usize,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { isa: Isa::Auto }
+        Settings {
+            isa: IsaSetting::Auto,
+            threads: 0,
+        }
     }
 }
 
 /// Configuration keys `Settings::parse` accepts.
-pub const CONFIG_KEYS: &[&str] = &["isa"];
+pub const CONFIG_KEYS: &[&str] = &["isa", "threads"];
+
+/// Most threads `threads=N` accepts.
+pub const MAX_THREADS: usize = 1024;
 
 impl Settings {
     /// Parse `key=value` pairs separated by whitespace, commas or semicolons.
@@ -48,23 +61,35 @@ impl Settings {
             match key {
                 "isa" => {
                     settings.isa = match value {
-                        "auto" => Isa::Auto,
-                        "scalar" => Isa::Scalar,
-                        "avx2" | "avx512" => {
-                            return Err(Error::new(
-                                Status::Unsupported,
-                                format!(
-                                    "isa={value}: this build has only the scalar kernels; valid: auto, scalar"
-                                ),
-                            ));
-                        }
-                        _ => {
-                            return Err(Error::new(
-                                Status::OutOfRange,
-                                format!("isa={value}: valid values: auto, scalar, avx2, avx512"),
-                            ));
-                        }
+                        "auto" => IsaSetting::Auto,
+                        _ => IsaSetting::Only(
+                            Isa::ALL
+                                .into_iter()
+                                .find(|isa| isa.name() == value)
+                                .ok_or_else(|| {
+                                    Error::new(
+                                        Status::OutOfRange,
+                                        format!(
+                                            "isa={value}: valid values: auto, scalar, avx2, avx512"
+                                        ),
+                                    )
+                                })?,
+                        ),
                     }
+                }
+                "threads" => {
+                    settings.threads = value
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|&n| n <= MAX_THREADS)
+                        .ok_or_else(|| {
+                            Error::new(
+                                Status::OutOfRange,
+                                format!(
+                                    "threads={value}: valid values: 0 (one per core), 1 (the calling thread only) .. {MAX_THREADS}"
+                                ),
+                            )
+                        })?
                 }
                 _ => {
                     return Err(Error::new(
@@ -81,17 +106,58 @@ impl Settings {
     }
 }
 
-/// The registry and settings a host creates once.
+/// The registry, settings, kernels and threads a host creates once.
 pub struct Runtime {
     pub registry: Registry,
     pub settings: Settings,
+    kernels: Kernels,
+    pool: Option<rayon::ThreadPool>,
 }
 
 impl Runtime {
     pub fn new(config: &str) -> Result<Runtime, Error> {
+        let settings = Settings::parse(config)?;
+        let kernels = match settings.isa {
+            IsaSetting::Auto => Kernels::best(),
+            IsaSetting::Only(isa) => Kernels::new(isa)?,
+        };
+        let pool = match settings.threads {
+            0 | 1 => None,
+            n => Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .thread_name(|i| format!("glint-{i}"))
+                    .build()
+                    .map_err(|e| {
+                        Error::new(
+                            Status::Unsupported,
+                            format!("threads={n}: cannot start the thread pool: {e}"),
+                        )
+                    })?,
+            ),
+        };
         Ok(Runtime {
             registry: Registry::with_builtins(),
-            settings: Settings::parse(config)?,
+            settings,
+            kernels,
+            pool,
         })
+    }
+
+    /// The kernel set batch calls use.
+    pub fn kernels(&self) -> Kernels {
+        self.kernels
+    }
+
+    /// How batch calls on closures of this runtime run.
+    pub fn exec(&self) -> Exec<'_> {
+        Exec {
+            kernels: self.kernels,
+            threads: match (&self.pool, self.settings.threads) {
+                (Some(pool), _) => Threads::Pool(pool),
+                (None, 1) => Threads::Caller,
+                (None, _) => Threads::Global,
+            },
+        }
     }
 }

@@ -1,27 +1,38 @@
 //! `Settings::parse` and `Runtime::new`: the configuration string's keys and values,
 //! with errors that name the valid keys and values.
 
-use glint::runtime::{CONFIG_KEYS, Isa, Settings};
+use glint::runtime::{CONFIG_KEYS, IsaSetting, MAX_THREADS, Settings};
+use glint::simd::{Isa, Kernels};
 use glint::{Runtime, Status};
 
 #[test]
 fn defaults_and_valid_values() {
-    assert_eq!(Settings::parse("").unwrap().isa, Isa::Auto);
+    assert_eq!(Settings::parse("").unwrap().isa, IsaSetting::Auto);
     assert_eq!(Settings::parse("  \t\n").unwrap(), Settings::default());
-    assert_eq!(Settings::parse("isa=auto").unwrap().isa, Isa::Auto);
-    assert_eq!(Settings::parse("isa=scalar").unwrap().isa, Isa::Scalar);
+    assert_eq!(Settings::parse("isa=auto").unwrap().isa, IsaSetting::Auto);
+    assert_eq!(
+        Settings::parse("isa=scalar").unwrap().isa,
+        IsaSetting::Only(Isa::Scalar)
+    );
     // Separators: whitespace, commas, semicolons; the last value wins.
     assert_eq!(
         Settings::parse("isa=auto, isa=scalar").unwrap().isa,
-        Isa::Scalar
+        IsaSetting::Only(Isa::Scalar)
     );
     assert_eq!(
         Settings::parse("isa=scalar;isa=auto").unwrap().isa,
-        Isa::Auto
+        IsaSetting::Auto
     );
-    assert_eq!(CONFIG_KEYS, ["isa"]);
+    assert_eq!(
+        Settings::parse("isa=avx512").unwrap().isa,
+        IsaSetting::Only(Isa::Avx512)
+    );
+    assert_eq!(Settings::parse("threads=3").unwrap().threads, 3);
+    assert_eq!(Settings::parse("").unwrap().threads, 0);
+    assert_eq!(CONFIG_KEYS, ["isa", "threads"]);
     let rt = Runtime::new("isa=scalar").unwrap();
-    assert_eq!(rt.settings.isa, Isa::Scalar);
+    assert_eq!(rt.settings.isa, IsaSetting::Only(Isa::Scalar));
+    assert_eq!(rt.kernels(), Kernels::scalar());
     assert_eq!(
         rt.registry.names(),
         ["lambert", "conductor", "dielectric", "mirror"]
@@ -29,32 +40,51 @@ fn defaults_and_valid_values() {
 }
 
 #[test]
-fn simd_isas_are_unsupported_in_this_build() {
-    for isa in ["avx2", "avx512"] {
-        let e = Settings::parse(&format!("isa={isa}")).unwrap_err();
-        assert_eq!(e.status, Status::Unsupported, "{isa}: {}", e.message);
-        assert!(
-            e.message.contains(isa) && e.message.contains("auto, scalar"),
-            "{}",
-            e.message
-        );
-        let e = Runtime::new(&format!("isa={isa}"))
-            .err()
-            .expect("runtime must fail");
-        assert_eq!(e.status, Status::Unsupported);
+fn every_isa_this_cpu_has_can_be_forced_and_the_others_are_refused() {
+    assert_eq!(Runtime::new("").unwrap().kernels(), Kernels::best());
+    for isa in Isa::ALL {
+        let config = format!("isa={}", isa.name());
+        match Runtime::new(&config) {
+            Ok(rt) => {
+                assert!(isa.is_supported());
+                assert_eq!(rt.kernels().isa(), isa);
+            }
+            Err(e) => {
+                assert!(!isa.is_supported(), "{config}: {}", e.message);
+                assert_eq!(e.status, Status::Unsupported);
+                assert!(
+                    e.message.contains(isa.name()) && e.message.contains("scalar"),
+                    "{}",
+                    e.message
+                );
+            }
+        }
     }
 }
 
 #[test]
+fn threads_values() {
+    for n in [0, 1, 2, MAX_THREADS] {
+        assert_eq!(Settings::parse(&format!("threads={n}")).unwrap().threads, n);
+    }
+    for bad in ["-1", "x", "", "1025", "2.5"] {
+        let e = Settings::parse(&format!("threads={bad}")).unwrap_err();
+        assert_eq!(e.status, Status::OutOfRange, "threads={bad}");
+        assert!(e.message.contains("threads="), "{}", e.message);
+    }
+    assert!(Runtime::new("threads=2").is_ok());
+}
+
+#[test]
 fn unknown_key_names_valid_keys() {
-    let e = Settings::parse("threads=4").unwrap_err();
+    let e = Settings::parse("frobnicate=4").unwrap_err();
     assert_eq!(e.status, Status::UnknownName);
     assert!(
-        e.message.contains("threads") && e.message.contains("valid keys: isa"),
+        e.message.contains("frobnicate") && e.message.contains("valid keys: isa, threads"),
         "{}",
         e.message
     );
-    let e = Settings::parse("isa=scalar threads=4").unwrap_err();
+    let e = Settings::parse("isa=scalar lanes=4").unwrap_err();
     assert_eq!(e.status, Status::UnknownName);
     // Keys are case-sensitive.
     assert_eq!(
@@ -68,7 +98,7 @@ fn bad_values_and_syntax() {
     let e = Settings::parse("isa=sse9").unwrap_err();
     assert_eq!(e.status, Status::OutOfRange);
     assert!(
-        e.message.contains("sse9") && e.message.contains("auto, scalar"),
+        e.message.contains("sse9") && e.message.contains("auto, scalar, avx2, avx512"),
         "{}",
         e.message
     );

@@ -64,10 +64,10 @@ fn pairs(eta: f64) -> Vec<(Vec3<f32>, Vec3<f32>)> {
                 if wr.z * wo64.z > 0.01 {
                     out.push((wo, wr.to32()));
                 }
-                if let Some((wt, _)) = refract(wo64, h, eta) {
-                    if wt.z * wo64.z < -0.01 {
-                        out.push((wo, wt.to32()));
-                    }
+                if let Some((wt, _)) = refract(wo64, h, eta)
+                    && wt.z * wo64.z < -0.01
+                {
+                    out.push((wo, wt.to32()));
                 }
             }
         }
@@ -370,11 +370,11 @@ fn library_sphere_integral(b: &Block, eta: f64, alpha: f64, wo: Vec3<f32>, mode:
         if wr.z * co > 0.0 {
             total += gray(l.eval(b.as_slice(), wo, wr.to32(), mode).value) * 4.0 * oh.abs();
         }
-        if let Some((wt, _)) = refract(wo64, h, eta) {
-            if wt.z * co < 0.0 {
-                let jac = (n_i * wt.dot(h) + n_o * oh).powi(2) / (n_i * n_i * wt.dot(h).abs());
-                total += gray(l.eval(b.as_slice(), wo, wt.to32(), mode).value) * jac;
-            }
+        if let Some((wt, _)) = refract(wo64, h, eta)
+            && wt.z * co < 0.0
+        {
+            let jac = (n_i * wt.dot(h) + n_o * oh).powi(2) / (n_i * n_i * wt.dot(h).abs());
+            total += gray(l.eval(b.as_slice(), wo, wt.to32(), mode).value) * jac;
         }
         [total, 0.0, 0.0]
     });

@@ -1,18 +1,43 @@
-//! Batch evaluation over SoA arrays. The arguments are shaped for the SIMD
-//! kernels (separate x/y/z arrays, an optional active mask, one closure or one
-//! per lane); this version runs each active lane through the scalar path.
+//! Batch evaluation over SoA arrays.
 //!
-//! Lanes whose inputs are invalid (NaN, infinite or zero-length directions) get
-//! zeroed outputs, the other lanes are still computed, and the call reports the
-//! first bad lane. Inactive lanes are not read or written.
+//! A call is cut into blocks of [`BLOCK`] lanes (run on rayon workers when the
+//! batch is large and the runtime allows threads). Within a block, active lanes are
+//! grouped by closure shape (`Closure::same_shape`; for sampling, also by the lobe
+//! each lane chose); each group's inputs are staged into padded SoA arrays, every
+//! lobe of the shape runs its kernel once over the group (`crate::simd::kernels`),
+//! and the results are scattered back in the caller's order. Inactive lanes are not
+//! read, computed or written. Every lane's result depends only on its own inputs,
+//! so results are identical whatever the thread count or the grouping.
+//!
+//! Lanes whose inputs are invalid (NaN, infinite or zero-length directions,
+//! unfinished closures) get zeroed outputs, the other lanes are still computed, and
+//! the call reports the first bad lane.
 
-use crate::closure::{Closure, EvalResult, SampleResult};
-use crate::error::{Error, Status};
+mod stage;
+
+use crate::closure::{Closure, SampleResult};
+use crate::error::Error;
+use crate::lobes::flags;
 use crate::math::{Rgb, Vec3};
+use crate::simd::Kernels;
+use crate::simd::kernels::{
+    AlbedoJob, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob, SampleJob,
+};
+use rayon::prelude::*;
+use stage::{
+    Randoms, Scratch, grow_f32, grow_u8, padded, rows3, stage_directions, view3, with_scratch,
+};
+
+/// Lanes per work item: a group's staged arrays stay in the L2 cache.
+pub const BLOCK: usize = 4096;
 
 /// Where each lane's closure comes from.
-pub trait ClosureSource<'a> {
+pub trait ClosureSource<'a>: Sync {
     fn closure(&self, lane: usize) -> Result<&'a Closure, Error>;
+    /// Whether every lane has the same closure.
+    fn is_shared(&self) -> bool {
+        false
+    }
 }
 
 /// One closure shared by every lane.
@@ -20,12 +45,43 @@ impl<'a> ClosureSource<'a> for &'a Closure {
     fn closure(&self, _lane: usize) -> Result<&'a Closure, Error> {
         Ok(self)
     }
+    fn is_shared(&self) -> bool {
+        true
+    }
 }
 
 /// One closure per lane.
 impl<'a> ClosureSource<'a> for &'a [&'a Closure] {
     fn closure(&self, lane: usize) -> Result<&'a Closure, Error> {
         Ok(self[lane])
+    }
+}
+
+/// Which threads a batch call may use.
+#[derive(Clone, Copy)]
+pub enum Threads<'a> {
+    /// Only the calling thread.
+    Caller,
+    /// Rayon's global pool.
+    Global,
+    /// A runtime's own pool (`threads=N`).
+    Pool(&'a rayon::ThreadPool),
+}
+
+/// How a batch call runs: its kernel set and its threads.
+#[derive(Clone, Copy)]
+pub struct Exec<'a> {
+    pub kernels: Kernels,
+    pub threads: Threads<'a>,
+}
+
+impl Exec<'static> {
+    /// Scalar kernels on the calling thread.
+    pub fn scalar() -> Self {
+        Exec {
+            kernels: Kernels::scalar(),
+            threads: Threads::Caller,
+        }
     }
 }
 
@@ -37,12 +93,6 @@ pub struct Soa3<'a> {
     pub z: &'a [f32],
 }
 
-impl Soa3<'_> {
-    fn unit(&self, lane: usize, what: &str) -> Result<Vec3<f32>, Error> {
-        Vec3::try_unit(self.x[lane], self.y[lane], self.z[lane], what)
-    }
-}
-
 /// Mutable SoA component arrays.
 pub struct Soa3Mut<'a> {
     pub x: &'a mut [f32],
@@ -50,11 +100,31 @@ pub struct Soa3Mut<'a> {
     pub z: &'a mut [f32],
 }
 
-impl Soa3Mut<'_> {
+impl<'a> Soa3Mut<'a> {
     fn set(&mut self, lane: usize, v: [f32; 3]) {
         self.x[lane] = v[0];
         self.y[lane] = v[1];
         self.z[lane] = v[2];
+    }
+
+    /// Cut into consecutive blocks of [`BLOCK`] lanes.
+    fn blocks(self) -> impl Iterator<Item = Soa3Mut<'a>> {
+        self.x
+            .chunks_mut(BLOCK)
+            .zip(self.y.chunks_mut(BLOCK))
+            .zip(self.z.chunks_mut(BLOCK))
+            .map(|((x, y), z)| Soa3Mut { x, y, z })
+    }
+}
+
+/// Cut an optional output into blocks, `None` for each block when absent.
+fn optional_blocks<'a, T>(
+    out: Option<&'a mut [T]>,
+    count: usize,
+) -> Box<dyn Iterator<Item = Option<&'a mut [T]>> + 'a> {
+    match out {
+        Some(s) => Box::new(s.chunks_mut(BLOCK).map(Some)),
+        None => Box::new((0..count.div_ceil(BLOCK)).map(|_| None)),
     }
 }
 
@@ -68,36 +138,28 @@ pub struct BatchInput<'a, C> {
 }
 
 impl<'a, C: ClosureSource<'a>> BatchInput<'a, C> {
-    /// For every active lane, `compute` its result and hand it to `write`
-    /// (`None` for a lane that failed). The first failure is returned after all
-    /// lanes ran.
-    fn for_each_lane<T>(
-        &self,
-        compute: impl Fn(usize, &'a Closure, Vec3<f32>) -> Result<T, Error>,
-        mut write: impl FnMut(usize, Option<T>),
-    ) -> Result<(), Error> {
-        let mut first_error: Option<Error> = None;
-        for i in 0..self.count {
-            if self.active.is_some_and(|a| a[i] == 0) {
-                continue;
-            }
-            let result = self
-                .closures
-                .closure(i)
-                .and_then(|c| compute(i, c, self.wo.unit(i, "wo")?));
-            match result {
-                Ok(r) => write(i, Some(r)),
-                Err(e) => {
-                    write(i, None);
-                    if first_error.is_none() {
-                        first_error =
-                            Some(Error::new(e.status, format!("lane {i}: {}", e.message)));
-                    }
-                }
-            }
-        }
-        first_error.map_or(Ok(()), Err)
+    fn is_active(&self, lane: usize) -> bool {
+        self.active.is_none_or(|a| a[lane] != 0)
     }
+}
+
+/// Run `block(start, out)` for every block, in parallel when the batch is large
+/// enough and `exec` allows; the error of the lowest failing lane wins.
+fn run_blocks<O: Send>(
+    exec: &Exec<'_>,
+    outputs: Vec<O>,
+    block: impl Fn(usize, O) -> Option<Error> + Sync,
+) -> Result<(), Error> {
+    let run = |(b, o): (usize, O)| block(b * BLOCK, o);
+    let errors: Vec<Option<Error>> = match exec.threads {
+        _ if outputs.len() < 2 => outputs.into_iter().enumerate().map(run).collect(),
+        Threads::Caller => outputs.into_iter().enumerate().map(run).collect(),
+        Threads::Global => outputs.into_par_iter().enumerate().map(run).collect(),
+        Threads::Pool(pool) => {
+            pool.install(|| outputs.into_par_iter().enumerate().map(run).collect())
+        }
+    };
+    errors.into_iter().flatten().next().map_or(Ok(()), Err)
 }
 
 /// Outputs of [`eval`].
@@ -109,37 +171,242 @@ pub struct EvalOutput<'a> {
 
 /// `eval` on every active lane.
 pub fn eval<'a, C: ClosureSource<'a>>(
+    exec: &Exec<'_>,
     input: &BatchInput<'a, C>,
     wi: Soa3<'_>,
-    mut out: EvalOutput<'_>,
+    out: EvalOutput<'_>,
 ) -> Result<(), Error> {
-    input.for_each_lane(
-        |i, closure, wo| closure.eval(wo, wi.unit(i, "wi")?),
-        |i, r| {
-            let r = r.unwrap_or(EvalResult {
-                value: Rgb::zero(),
-                pdf: 0.0,
-                pdf_reverse: 0.0,
-            });
-            out.value.set(i, r.value.to_array());
-            out.pdf[i] = r.pdf;
-            if let Some(rev) = out.pdf_reverse.as_deref_mut() {
-                rev[i] = r.pdf_reverse;
-            }
-        },
-    )
+    let n = input.count;
+    let blocks: Vec<_> = out
+        .value
+        .blocks()
+        .zip(out.pdf.chunks_mut(BLOCK))
+        .zip(optional_blocks(out.pdf_reverse, n))
+        .map(|((value, pdf), pdf_reverse)| EvalBlockOutput {
+            value: Some(value),
+            pdf,
+            pdf_reverse,
+        })
+        .collect();
+    run_blocks(exec, blocks, |start, mut out| {
+        with_scratch(|s| eval_block(exec.kernels, input, wi, start, s, &mut out))
+    })
 }
 
 /// `pdf` on every active lane.
 pub fn pdf<'a, C: ClosureSource<'a>>(
+    exec: &Exec<'_>,
     input: &BatchInput<'a, C>,
     wi: Soa3<'_>,
     out: &mut [f32],
 ) -> Result<(), Error> {
-    input.for_each_lane(
-        |i, closure, wo| closure.pdf(wo, wi.unit(i, "wi")?),
-        |i, p| out[i] = p.unwrap_or(0.0),
-    )
+    let blocks: Vec<_> = out
+        .chunks_mut(BLOCK)
+        .map(|pdf| EvalBlockOutput {
+            value: None,
+            pdf,
+            pdf_reverse: None,
+        })
+        .collect();
+    run_blocks(exec, blocks, |start, mut out| {
+        with_scratch(|s| eval_block(exec.kernels, input, wi, start, s, &mut out))
+    })
+}
+
+/// One block's eval or pdf outputs; `None` = not wanted.
+struct EvalBlockOutput<'o> {
+    value: Option<Soa3Mut<'o>>,
+    pdf: &'o mut [f32],
+    pdf_reverse: Option<&'o mut [f32]>,
+}
+
+/// Eval the block starting at lane `start`.
+fn eval_block<'a, C: ClosureSource<'a>>(
+    kernels: Kernels,
+    input: &BatchInput<'a, C>,
+    wi: Soa3<'_>,
+    start: usize,
+    s: &mut Scratch,
+    out: &mut EvalBlockOutput<'_>,
+) -> Option<Error> {
+    let end = (start + BLOCK).min(input.count);
+    s.groups.build(input, start..end, None);
+    for g in 0..s.groups.groups().len() {
+        let group = &s.groups.groups()[g];
+        let len = padded(group.lanes.len());
+        s.reset(len);
+        stage_input(kernels, input, s, g, len, Some(wi));
+        let group = &s.groups.groups()[g];
+        let closure = input.closures.closure(group.rep).expect("resolved before");
+        for (k, l) in closure.lobes().iter().enumerate() {
+            let lanes = s.lobe.lanes(input, group, k, len);
+            let [vr, vg, vb] = &mut s.value;
+            let mut job = EvalJob {
+                len,
+                mode: closure.transport(),
+                wo: view3(&s.wo, len),
+                wi: view3(&s.wi, len),
+                lobe: lanes,
+                value: out
+                    .value
+                    .is_some()
+                    .then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
+                pdf: &mut s.pdf[..len],
+            };
+            l.lobe.eval_lanes(kernels, &mut job);
+            if out.pdf_reverse.is_some() {
+                let mut job = EvalJob {
+                    len,
+                    mode: closure.transport(),
+                    wo: view3(&s.wi, len),
+                    wi: view3(&s.wo, len),
+                    lobe: lanes,
+                    value: None,
+                    pdf: &mut s.pdf_reverse[..len],
+                };
+                l.lobe.eval_lanes(kernels, &mut job);
+            }
+        }
+        let scatter = Scatter::new(&group.lanes, start, &s.failed, s.any_failed);
+        if let Some(v) = out.value.as_mut() {
+            scatter.rows(&s.value, [&mut *v.x, &mut *v.y, &mut *v.z]);
+        }
+        scatter.row(&s.pdf, out.pdf);
+        if let Some(rev) = out.pdf_reverse.as_deref_mut() {
+            scatter.row(&s.pdf_reverse, rev);
+        }
+    }
+    finish_block(s, start, |lane| {
+        if let Some(v) = out.value.as_mut() {
+            v.set(lane, [0.0; 3]);
+        }
+        out.pdf[lane] = 0.0;
+        if let Some(rev) = out.pdf_reverse.as_deref_mut() {
+            rev[lane] = 0.0;
+        }
+    })
+}
+
+/// Stage group `g`'s `wo` (and `wi`) into the scratch rows.
+fn stage_input<'a, C: ClosureSource<'a>>(
+    kernels: Kernels,
+    input: &BatchInput<'a, C>,
+    s: &mut Scratch,
+    g: usize,
+    len: usize,
+    wi: Option<Soa3<'_>>,
+) {
+    let Scratch {
+        groups,
+        wo: wo_rows,
+        wi: wi_rows,
+        failed,
+        any_failed,
+        ..
+    } = s;
+    let lanes = std::mem::take(&mut groups.list_mut()[g].lanes);
+    let mut stage = |src: Soa3<'_>, what: &str, rows: &mut [Vec<f32>; 3]| {
+        *any_failed |= stage_directions(kernels, src, what, &lanes, len, rows, failed, groups);
+    };
+    stage(input.wo, "wo", wo_rows);
+    if let Some(wi) = wi {
+        stage(wi, "wi", wi_rows);
+    }
+    groups.list_mut()[g].lanes = lanes;
+}
+
+/// Writes a group's staged results back to the caller's lanes.
+struct Scatter<'g> {
+    lanes: &'g [u32],
+    start: usize,
+    /// The group's lanes are `first .. first + len` (block-local).
+    contiguous: Option<usize>,
+    failed: Option<&'g [u8]>,
+}
+
+impl<'g> Scatter<'g> {
+    fn new(lanes: &'g [u32], start: usize, failed: &'g [u8], any_failed: bool) -> Self {
+        let contiguous = match (lanes.first(), lanes.last()) {
+            (Some(&a), Some(&b)) if (b - a) as usize + 1 == lanes.len() => Some(a as usize - start),
+            _ => None,
+        };
+        Scatter {
+            lanes,
+            start,
+            contiguous,
+            failed: any_failed.then_some(failed),
+        }
+    }
+
+    /// `out[lane] = staged[j]` for the group's `j`-th lane; failed lanes get 0.
+    fn row(&self, staged: &[f32], out: &mut [f32]) {
+        let n = self.lanes.len();
+        match self.contiguous {
+            Some(first) => out[first..first + n].copy_from_slice(&staged[..n]),
+            None => {
+                for (j, &lane) in self.lanes.iter().enumerate() {
+                    out[lane as usize - self.start] = staged[j];
+                }
+            }
+        }
+        if let Some(failed) = self.failed {
+            for (j, &lane) in self.lanes.iter().enumerate() {
+                if failed[j] != 0 {
+                    out[lane as usize - self.start] = 0.0;
+                }
+            }
+        }
+    }
+
+    fn rows(&self, staged: &[Vec<f32>; 3], out: [&mut [f32]; 3]) {
+        for (row, out) in staged.iter().zip(out) {
+            self.row(row, out);
+        }
+    }
+}
+
+/// Zero-output the lanes that failed before grouping; the block's first error.
+fn finish_block(s: &mut Scratch, start: usize, mut zero: impl FnMut(usize)) -> Option<Error> {
+    for &lane in &s.groups.failed {
+        zero(lane as usize - start);
+    }
+    s.groups.take_error()
+}
+
+/// Directional albedo of every active lane's closure.
+pub fn albedo<'a, C: ClosureSource<'a>>(
+    exec: &Exec<'_>,
+    input: &BatchInput<'a, C>,
+    out: Soa3Mut<'_>,
+) -> Result<(), Error> {
+    let blocks: Vec<_> = out.blocks().collect();
+    run_blocks(exec, blocks, |start, mut out| {
+        with_scratch(|s| {
+            let end = (start + BLOCK).min(input.count);
+            s.groups.build(input, start..end, None);
+            for g in 0..s.groups.groups().len() {
+                let len = padded(s.groups.groups()[g].lanes.len());
+                s.reset(len);
+                stage_input(exec.kernels, input, s, g, len, None);
+                let group = &s.groups.groups()[g];
+                let closure = input.closures.closure(group.rep).expect("resolved before");
+                for (k, l) in closure.lobes().iter().enumerate() {
+                    let lanes = s.lobe.lanes(input, group, k, len);
+                    let mut job = AlbedoJob {
+                        len,
+                        mode: closure.transport(),
+                        wo: view3(&s.wo, len),
+                        lobe: lanes,
+                        value: rows3(&mut s.value, len),
+                    };
+                    l.lobe.albedo_lanes(exec.kernels, &mut job);
+                }
+                Scatter::new(&group.lanes, start, &s.failed, s.any_failed)
+                    .rows(&s.value, [&mut *out.x, &mut *out.y, &mut *out.z]);
+            }
+            finish_block(s, start, |lane| out.set(lane, [0.0; 3]))
+        })
+    })
 }
 
 /// Random numbers of [`sample`], one array per dimension.
@@ -212,15 +479,161 @@ const FAILED: SampleResult = SampleResult {
 /// `sample` on every active lane. A lane that cannot scatter is not an error: it
 /// gets `pdf = 0` and zero weight, as `glint_sample` returns `GLINT_NO_SAMPLE`.
 pub fn sample<'a, C: ClosureSource<'a>>(
+    exec: &Exec<'_>,
     input: &BatchInput<'a, C>,
     u: SampleRandoms<'_>,
-    mut out: SampleOutput<'_>,
+    out: SampleOutput<'_>,
 ) -> Result<(), Error> {
-    input.for_each_lane(
-        |i, closure, wo| match closure.sample(wo, [u.u_lobe[i], u.u0[i], u.u1[i]]) {
-            Err(e) if e.status == Status::NoSample => Ok(FAILED),
-            r => r,
-        },
-        |i, s| out.write(i, &s.unwrap_or(FAILED)),
-    )
+    let n = input.count;
+    let blocks: Vec<_> = out
+        .wi
+        .blocks()
+        .zip(out.pdf.chunks_mut(BLOCK))
+        .zip(out.weight.blocks())
+        .zip(match out.value {
+            Some(v) => Box::new(v.blocks().map(Some)) as Box<dyn Iterator<Item = _>>,
+            None => Box::new((0..n.div_ceil(BLOCK)).map(|_| None)),
+        })
+        .zip(optional_blocks(out.flags, n))
+        .zip(optional_blocks(out.lobe, n))
+        .zip(optional_blocks(out.eta, n))
+        .zip(optional_blocks(out.roughness, n))
+        .map(
+            |(((((((wi, pdf), weight), value), flags), lobe), eta), roughness)| SampleOutput {
+                wi,
+                pdf,
+                weight,
+                value,
+                flags,
+                lobe,
+                eta,
+                roughness,
+            },
+        )
+        .collect();
+    run_blocks(exec, blocks, |start, mut out| {
+        with_scratch(|s| sample_block(exec.kernels, input, u, start, s, &mut out))
+    })
+}
+
+fn sample_block<'a, C: ClosureSource<'a>>(
+    kernels: Kernels,
+    input: &BatchInput<'a, C>,
+    u: SampleRandoms<'_>,
+    start: usize,
+    s: &mut Scratch,
+    out: &mut SampleOutput<'_>,
+) -> Option<Error> {
+    let end = (start + BLOCK).min(input.count);
+    let randoms = Randoms {
+        u: [u.u_lobe, u.u0, u.u1],
+    };
+    s.groups.build(input, start..end, Some(randoms));
+    for g in 0..s.groups.groups().len() {
+        let len = padded(s.groups.groups()[g].lanes.len());
+        s.reset(len);
+        stage_input(kernels, input, s, g, len, None);
+        let group = &s.groups.groups()[g];
+        let closure = input.closures.closure(group.rep).expect("resolved before");
+        let k = group.lobe;
+        let lobe = closure.lobes()[k].lobe;
+        // The chosen lobe's random numbers: the rescaled lobe choice, then u0, u1.
+        let [uc, u0, u1] = rows3(&mut s.u, len);
+        for (j, &lane) in group.lanes.iter().enumerate() {
+            let lane = lane as usize;
+            uc[j] = s.groups.u_reused[lane - start];
+            u0[j] = u.u0[lane];
+            u1[j] = u.u1[lane];
+        }
+        for row in [uc, u0, u1] {
+            row[group.lanes.len()..].fill(0.5);
+        }
+        let lanes = s.lobe.lanes(input, group, k, len);
+        let [sv_r, sv_g, sv_b] = &mut s.sample_value;
+        let mut job = SampleJob {
+            len,
+            mode: closure.transport(),
+            wo: view3(&s.wo, len),
+            u: view3(&s.u, len),
+            lobe: lanes,
+            wi: rows3(&mut s.wi, len),
+            value: [
+                grow_f32(sv_r, len),
+                grow_f32(sv_g, len),
+                grow_f32(sv_b, len),
+            ],
+            pdf: grow_f32(&mut s.sample_pdf, len),
+            eta: grow_f32(&mut s.eta, len),
+            roughness: grow_f32(&mut s.roughness, len),
+            events: grow_u8(&mut s.events, len),
+        };
+        lobe.sample_lanes(kernels, &mut job);
+        let mixture = closure.lobes().len() > 1;
+        if mixture {
+            for (m, l) in closure.lobes().iter().enumerate() {
+                let lanes = s.lobe.lanes(input, group, m, len);
+                let [vr, vg, vb] = &mut s.value;
+                let mut job = EvalJob {
+                    len,
+                    mode: closure.transport(),
+                    wo: view3(&s.wo, len),
+                    wi: view3(&s.wi, len),
+                    lobe: lanes,
+                    value: Some([&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
+                    pdf: &mut s.pdf[..len],
+                };
+                l.lobe.eval_lanes(kernels, &mut job);
+            }
+        }
+        let lobe_flags = lobe.flags();
+        for (j, &lane) in group.lanes.iter().enumerate() {
+            let events = s.events[j];
+            let c = input
+                .closures
+                .closure(lane as usize)
+                .expect("resolved before");
+            let sampled = Rgb::new(
+                s.sample_value[0][j],
+                s.sample_value[1][j],
+                s.sample_value[2][j],
+            );
+            let (value, pdf) = if events & EVENT_DELTA != 0 {
+                (sampled, c.lobes()[k].probability * s.sample_pdf[j])
+            } else if mixture {
+                (
+                    Rgb::new(s.value[0][j], s.value[1][j], s.value[2][j]),
+                    s.pdf[j],
+                )
+            } else {
+                (sampled, s.sample_pdf[j])
+            };
+            let ok = s.failed[j] == 0 && events & EVENT_VALID != 0 && pdf > 0.0 && pdf.is_finite();
+            let result = if ok {
+                let side = if events & EVENT_TRANSMITTED != 0 {
+                    flags::TRANSMISSION
+                } else {
+                    flags::REFLECTION
+                };
+                let class = if events & EVENT_DELTA != 0 {
+                    flags::SPECULAR
+                } else {
+                    lobe_flags & (flags::DIFFUSE | flags::GLOSSY)
+                };
+                SampleResult {
+                    wi: Vec3::new(s.wi[0][j], s.wi[1][j], s.wi[2][j]),
+                    value,
+                    pdf,
+                    weight: value.map(|v| v / pdf),
+                    flags: side | class,
+                    lobe: k as u32,
+                    eta: s.eta[j],
+                    roughness: s.roughness[j],
+                }
+            } else {
+                FAILED
+            };
+            out.write(lane as usize - start, &result);
+        }
+    }
+    finish_block(s, start, |lane| out.write(lane, &FAILED))
 }

@@ -108,6 +108,23 @@ impl Closure {
         &self.lobes[..self.lobe_count]
     }
 
+    /// Whether `other` has the same lobe types in the same order, the same enumerated
+    /// choices and the same transport: lanes of such closures share batch kernels.
+    pub fn same_shape(&self, other: &Closure) -> bool {
+        self.lobe_count == other.lobe_count
+            && self.mode == other.mode
+            && (0..self.lobe_count).all(|k| {
+                let (a, b) = (&self.lobes[k], &other.lobes[k]);
+                a.type_id == b.type_id
+                    && a.lobe.name() == b.lobe.name()
+                    && params::same_choices(
+                        a.lobe.params(),
+                        self.lobe_params(k),
+                        other.lobe_params(k),
+                    )
+            })
+    }
+
     /// The parameter block of lobe `index`.
     pub fn lobe_params(&self, index: usize) -> &[f32] {
         let l = &self.lobes[index];
@@ -212,7 +229,7 @@ impl Closure {
         Ok(())
     }
 
-    fn check_finished(&self) -> Result<(), Error> {
+    pub(crate) fn check_finished(&self) -> Result<(), Error> {
         if self.finished {
             Ok(())
         } else {
@@ -298,7 +315,15 @@ impl Closure {
     pub fn sample(&self, wo: Vec3<f32>, u: [f32; 3]) -> Result<SampleResult, Error> {
         self.check_finished()?;
         check_randoms(u)?;
-        let u_lobe = u[0].clamp(0.0, ONE_MINUS_EPSILON);
+        let (chosen, u_reused) = self.choose_lobe(u[0]).ok_or_else(no_sample)?;
+        let probability = self.lobes[chosen].probability;
+        self.sample_from(chosen, wo, [u_reused, u[1], u[2]], Some(probability))
+    }
+
+    /// The lobe `u_lobe` selects and `u_lobe` rescaled to [0, 1) within its bin, or
+    /// `None` when no lobe can be chosen.
+    pub(crate) fn choose_lobe(&self, u_lobe: f32) -> Option<(usize, f32)> {
+        let u_lobe = u_lobe.clamp(0.0, ONE_MINUS_EPSILON);
         let mut start = 0.0;
         let mut chosen = self.lobe_count;
         for (k, l) in self.lobes().iter().enumerate() {
@@ -310,16 +335,14 @@ impl Closure {
         }
         if chosen == self.lobe_count {
             // Round-off left u_lobe past the last bin: take the last lobe that can be chosen.
-            chosen = self
-                .lobes()
-                .iter()
-                .rposition(|l| l.probability > 0.0)
-                .ok_or_else(no_sample)?;
+            chosen = self.lobes().iter().rposition(|l| l.probability > 0.0)?;
             start = 1.0 - self.lobes[chosen].probability;
         }
         let probability = self.lobes[chosen].probability;
-        let u_reused = ((u_lobe - start) / probability).clamp(0.0, ONE_MINUS_EPSILON);
-        self.sample_from(chosen, wo, [u_reused, u[1], u[2]], Some(probability))
+        Some((
+            chosen,
+            ((u_lobe - start) / probability).clamp(0.0, ONE_MINUS_EPSILON),
+        ))
     }
 
     /// Sample lobe `index` alone: value is `weight * f |cos|`, pdf that lobe's own.
@@ -353,6 +376,8 @@ impl Closure {
         let wi = l.frame.to_world(s.wi).normalize();
         let (value, pdf) = match mixture {
             Some(p) if s.delta => (l.weight * s.value, p * s.pdf),
+            // One lobe: the mixture is the lobe itself (probability 1).
+            Some(_) if self.lobe_count == 1 => (l.weight * s.value, s.pdf),
             Some(_) => self.mixture(wo, wi),
             None if s.delta => (l.weight * s.value, s.pdf),
             None => self.eval_one(k, wo, wi),
@@ -404,10 +429,10 @@ impl Closure {
 }
 
 /// The largest `f32` below 1, so that `u < 1` for every sample dimension.
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+pub(crate) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Random numbers must be finite (they are clamped into [0, 1)).
-fn check_randoms(u: [f32; 3]) -> Result<(), Error> {
+pub(crate) fn check_randoms(u: [f32; 3]) -> Result<(), Error> {
     match u.iter().position(|x| !x.is_finite()) {
         Some(i) => Err(Error::new(
             Status::InvalidArgument,

@@ -4,7 +4,9 @@
 //! leaving their outputs untouched.
 
 use super::*;
-use crate::batch::{self, BatchInput, EvalOutput, SampleOutput, SampleRandoms, Soa3, Soa3Mut};
+use crate::batch::{
+    self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut,
+};
 use crate::closure::Closure;
 
 /// Arguments of `glint_eval_batch`.
@@ -87,6 +89,24 @@ pub struct glint_sample_batch_args {
     pub roughness: *mut f32,
 }
 
+/// Arguments of `glint_albedo_batch`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_albedo_batch_args {
+    /// Set by the caller to `sizeof(glint_albedo_batch_args)`.
+    pub struct_size: u32,
+    pub count: usize,
+    pub closure: *const glint_closure,
+    pub closures: *const *const glint_closure,
+    pub active: *const u8,
+    pub wo_x: *const f32,
+    pub wo_y: *const f32,
+    pub wo_z: *const f32,
+    pub albedo_r: *mut f32,
+    pub albedo_g: *mut f32,
+    pub albedo_b: *mut f32,
+}
+
 /// The fields every batch argument struct shares.
 struct CommonArgs {
     count: usize,
@@ -119,7 +139,8 @@ macro_rules! batch_args {
 batch_args!(
     glint_eval_batch_args,
     glint_pdf_batch_args,
-    glint_sample_batch_args
+    glint_sample_batch_args,
+    glint_albedo_batch_args
 );
 
 /// `count` elements at `p`, which must not be NULL.
@@ -156,6 +177,7 @@ unsafe fn optional<'a, T>(p: *mut T, count: usize) -> Option<&'a mut [T]> {
 }
 
 /// Per-lane closures from C handles.
+#[derive(Clone, Copy)]
 struct CClosures<'a>(&'a [*const glint_closure]);
 
 impl<'a> batch::ClosureSource<'a> for CClosures<'a> {
@@ -165,10 +187,27 @@ impl<'a> batch::ClosureSource<'a> for CClosures<'a> {
     }
 }
 
+// SAFETY: the handles are only read, and finished closures are immutable; the API
+// documents that closures may be shared by threads.
+unsafe impl Sync for CClosures<'_> {}
+
 /// Which closures the lanes use.
 enum Lanes<'a> {
-    One(&'a Closure),
+    One(&'a glint_closure),
     PerLane(CClosures<'a>),
+}
+
+impl Lanes<'_> {
+    /// The kernels and threads of the runtime the closures were built with (the
+    /// first non-NULL handle's, for per-lane closures).
+    fn exec(&self) -> Exec<'_> {
+        let first = match self {
+            Lanes::One(c) => Some(*c),
+            // SAFETY: handles are NULL or live per the contract.
+            Lanes::PerLane(c) => c.0.iter().find_map(|&h| unsafe { h.as_ref() }),
+        };
+        first.map_or(Exec::scalar(), |c| c.runtime().exec())
+    }
 }
 
 /// # Safety
@@ -180,9 +219,9 @@ unsafe fn lanes<'a>(
 ) -> Result<Lanes<'a>, Error> {
     if closures.is_null() {
         // SAFETY: per the contract.
-        Ok(Lanes::One(
-            &unsafe { deref(closure, "closure (and closures is NULL)") }?.closure,
-        ))
+        Ok(Lanes::One(unsafe {
+            deref(closure, "closure (and closures is NULL)")
+        }?))
     } else {
         // SAFETY: per the contract.
         Ok(Lanes::PerLane(CClosures(unsafe {
@@ -249,11 +288,11 @@ unsafe fn read_common<'a>(
 /// Run `f` with the batch input for whichever closure source the lanes use.
 macro_rules! with_input {
     ($lanes:expr, $count:expr, $active:expr, $wo:expr, |$input:ident| $body:expr) => {
-        match $lanes {
+        match &$lanes {
             Lanes::One(c) => {
                 let $input = BatchInput {
                     count: $count,
-                    closures: c,
+                    closures: &c.closure,
                     active: $active,
                     wo: $wo,
                 };
@@ -262,7 +301,7 @@ macro_rules! with_input {
             Lanes::PerLane(c) => {
                 let $input = BatchInput {
                     count: $count,
-                    closures: c,
+                    closures: *c,
                     active: $active,
                     wo: $wo,
                 };
@@ -292,7 +331,12 @@ pub unsafe extern "C" fn glint_eval_batch(args: *const glint_eval_batch_args) ->
                 pdf: output(a.pdf, n, "pdf")?,
                 pdf_reverse: optional(a.pdf_reverse, n),
             };
-            with_input!(lanes, n, active, wo, |input| batch::eval(&input, wi, out))
+            with_input!(lanes, n, active, wo, |input| batch::eval(
+                &lanes.exec(),
+                &input,
+                wi,
+                out
+            ))
         }
     })
 }
@@ -313,7 +357,12 @@ pub unsafe extern "C" fn glint_pdf_batch(args: *const glint_pdf_batch_args) -> g
             let (lanes, active, wo) = read_common(&a.common())?;
             let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
             let pdf = output(a.pdf, n, "pdf")?;
-            with_input!(lanes, n, active, wo, |input| batch::pdf(&input, wi, pdf))
+            with_input!(lanes, n, active, wo, |input| batch::pdf(
+                &lanes.exec(),
+                &input,
+                wi,
+                pdf
+            ))
         }
     })
 }
@@ -352,7 +401,36 @@ pub unsafe extern "C" fn glint_sample_batch(args: *const glint_sample_batch_args
                 eta: optional(a.eta, n),
                 roughness: optional(a.roughness, n),
             };
-            with_input!(lanes, n, active, wo, |input| batch::sample(&input, u, out))
+            with_input!(lanes, n, active, wo, |input| batch::sample(
+                &lanes.exec(),
+                &input,
+                u,
+                out
+            ))
+        }
+    })
+}
+
+/// Directional albedo (`glint_albedo`) over SoA arrays.
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on `glint_albedo_batch_args`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_albedo_batch(args: *const glint_albedo_batch_args) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.count;
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let (lanes, active, wo) = read_common(&a.common())?;
+            let out = soa_out(a.albedo_r, a.albedo_g, a.albedo_b, n, "albedo")?;
+            with_input!(lanes, n, active, wo, |input| batch::albedo(
+                &lanes.exec(),
+                &input,
+                out
+            ))
         }
     })
 }

@@ -17,6 +17,15 @@ pub struct glint_closure {
     runtime: *const glint_runtime,
 }
 
+impl glint_closure {
+    /// The runtime the closure was built with.
+    pub(crate) fn runtime(&self) -> &crate::Runtime {
+        // SAFETY: runtimes outlive the arenas and closures made with them (documented
+        // on `glint_runtime_destroy`).
+        unsafe { &(*self.runtime).runtime }
+    }
+}
+
 /// A shading frame: unit normal and an optional tangent (all zeros: chosen
 /// automatically). Neither needs to be normalized; the tangent is made orthogonal.
 #[repr(C)]

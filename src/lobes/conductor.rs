@@ -102,6 +102,7 @@ impl Model for Conductor {
         0.11 + 0.6 * params[ANISOTROPIC]
     }
 
+    #[inline(always)]
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         let roughness = params.float(ROUGHNESS);
         Prepared {
@@ -115,6 +116,7 @@ impl Model for Conductor {
         }
     }
 
+    #[inline(always)]
     fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, _mode: Transport) -> Eval<L> {
         let ok = both_above(wo, wi) & !p.dist.is_delta();
         if !ok.any() {
@@ -130,6 +132,7 @@ impl Model for Conductor {
         Eval { value, pdf }
     }
 
+    #[inline(always)]
     fn sample<L: Lane>(
         p: &Prepared<L>,
         wo: Vec3<L>,
@@ -157,6 +160,7 @@ impl Model for Conductor {
         }
     }
 
+    #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
         microfacet_reflection_albedo(&p.dist, &p.fresnel, wo)
     }
@@ -164,6 +168,7 @@ impl Model for Conductor {
 
 /// Albedo of a one-sided microfacet reflection lobe with Fresnel `fresnel`: the
 /// split-sum table when rough, exact `F(cos_o)` when delta.
+#[inline(always)]
 pub(crate) fn microfacet_reflection_albedo<L: Lane>(
     dist: &Distribution<L>,
     fresnel: &FresnelModel<L>,
@@ -171,7 +176,11 @@ pub(crate) fn microfacet_reflection_albedo<L: Lane>(
 ) -> Rgb<L> {
     let [a, b, c] = ReflectionTable::get(dist.kind).lookup(wo.z, dist);
     let (f0, f90, lazanyi) = fresnel.split_sum_fit();
-    let rough = (f0 * a + f90 * b).zip(lazanyi, |v, l| (v - l * c).max(L::zero()));
+    let rough = (f0 * a + f90 * b).zip(
+        lazanyi,
+        #[inline(always)]
+        |v, l| (v - l * c).max(L::zero()),
+    );
     let exact = fresnel.eval(wo.z);
     let albedo = Rgb::select(dist.is_delta(), exact, rough);
     Rgb::select(wo.z.gt(L::zero()), albedo, Rgb::zero())

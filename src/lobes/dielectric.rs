@@ -187,6 +187,7 @@ impl Model for Dielectric {
         0.09 + 0.6 * params[ANISOTROPIC]
     }
 
+    #[inline(always)]
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         let roughness = params.float(ROUGHNESS);
         let eta = params.float(ETA);
@@ -204,6 +205,7 @@ impl Model for Dielectric {
         }
     }
 
+    #[inline(always)]
     fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L> {
         let (cos_o, cos_i) = (wo.z, wi.z);
         let reflect = (cos_o * cos_i).gt(L::zero());
@@ -233,6 +235,7 @@ impl Model for Dielectric {
         }
     }
 
+    #[inline(always)]
     fn sample<L: Lane>(
         p: &Prepared<L>,
         wo: Vec3<L>,
@@ -270,6 +273,7 @@ impl Model for Dielectric {
         }
     }
 
+    #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, mode: Transport) -> Rgb<L> {
         let cos_o = wo.z;
         let etap = L::select(cos_o.gt(L::zero()), p.eta, L::one() / p.eta);

@@ -33,6 +33,7 @@ macro_rules! with_fresnel_params {
 pub(crate) use with_fresnel_params;
 
 /// Decode the Fresnel group starting at block offset `at`.
+#[inline(always)]
 pub fn decode<L: Lane>(params: &Params<'_, L>, at: usize) -> FresnelModel<L> {
     let rgb = |i: usize| params.rgb(at + 1 + 3 * i);
     match params.choice(at) {

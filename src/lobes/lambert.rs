@@ -49,12 +49,14 @@ impl Model for Lambert {
         1e-5
     }
 
+    #[inline(always)]
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         Prepared {
             color: params.rgb(COLOR),
         }
     }
 
+    #[inline(always)]
     fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, _mode: Transport) -> Eval<L> {
         let ok = both_above(wo, wi);
         let cos_i = L::select(ok, wi.z, L::zero());
@@ -64,6 +66,7 @@ impl Model for Lambert {
         }
     }
 
+    #[inline(always)]
     fn sample<L: Lane>(
         p: &Prepared<L>,
         wo: Vec3<L>,
@@ -91,6 +94,7 @@ impl Model for Lambert {
         }
     }
 
+    #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
         Rgb::select(wo.z.gt(L::zero()), p.color, Rgb::zero())
     }

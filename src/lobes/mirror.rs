@@ -46,16 +46,19 @@ impl Model for Mirror {
         1e-5
     }
 
+    #[inline(always)]
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         Prepared {
             fresnel: fresnel_params::decode(&params, FRESNEL),
         }
     }
 
+    #[inline(always)]
     fn eval<L: Lane>(_p: &Prepared<L>, _wo: Vec3<L>, _wi: Vec3<L>, _mode: Transport) -> Eval<L> {
         Eval::zero()
     }
 
+    #[inline(always)]
     fn sample<L: Lane>(
         p: &Prepared<L>,
         wo: Vec3<L>,
@@ -76,6 +79,7 @@ impl Model for Mirror {
         }
     }
 
+    #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
         Rgb::select(wo.z.gt(L::zero()), p.fresnel.eval(wo.z), Rgb::zero())
     }

@@ -19,6 +19,8 @@ pub mod mirror;
 
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::params::ParamSpec;
+use crate::simd::Kernels;
+use crate::simd::kernels::{self, AlbedoJob, EvalJob, SampleJob};
 use std::marker::PhantomData;
 
 /// Sample and lobe flags (bit set), as in the C API's `GLINT_FLAG_*`.
@@ -47,6 +49,7 @@ pub struct Eval<L> {
 }
 
 impl<L: Lane> Eval<L> {
+    #[inline(always)]
     pub fn zero() -> Self {
         Eval {
             value: Rgb::zero(),
@@ -84,7 +87,14 @@ impl<L: Lane> Sample<L> {
             & self.value.b.is_finite();
         self.valid = ok;
         self.pdf = L::select(ok, self.pdf, L::zero());
-        self.value = Rgb::select(ok, self.value.map(|v| v.max(L::zero())), Rgb::zero());
+        self.value = Rgb::select(
+            ok,
+            self.value.map(
+                #[inline(always)]
+                |v| v.max(L::zero()),
+            ),
+            Rgb::zero(),
+        );
         self.wi = Vec3::select(ok, self.wi, Vec3::new(L::zero(), L::zero(), L::zero()));
         self
     }
@@ -112,7 +122,10 @@ impl<L: Lane> Sample<L> {
     #[inline(always)]
     pub fn weight(&self) -> Rgb<L> {
         let pdf = self.pdf;
-        self.value.map(|v| v.safe_div(pdf))
+        self.value.map(
+            #[inline(always)]
+            |v| v.safe_div(pdf),
+        )
     }
 }
 
@@ -123,6 +136,7 @@ pub struct Params<'a, L> {
 }
 
 impl<'a, L: Lane> Params<'a, L> {
+    #[inline(always)]
     pub fn new(raw: &'a [L]) -> Self {
         Params { raw }
     }
@@ -193,6 +207,20 @@ pub trait LobeType: Send + Sync {
     }
     /// Documented relative accuracy of `albedo` with these parameters.
     fn albedo_tolerance(&self, params: &[f32]) -> f32;
+
+    /// `eval` over a group of lanes (the batch kernels). The default loops over
+    /// [`LobeType::eval`]; built-in lobes run their SIMD kernels.
+    fn eval_lanes(&self, _kernels: Kernels, job: &mut EvalJob<'_>) {
+        kernels::eval_each_lane(job, |params, wo, wi, mode| self.eval(params, wo, wi, mode));
+    }
+    /// `sample` over a group of lanes; the default loops over [`LobeType::sample`].
+    fn sample_lanes(&self, _kernels: Kernels, job: &mut SampleJob<'_>) {
+        kernels::sample_each_lane(job, |params, wo, u, mode| self.sample(params, wo, u, mode));
+    }
+    /// `albedo` over a group of lanes; the default loops over [`LobeType::albedo`].
+    fn albedo_lanes(&self, _kernels: Kernels, job: &mut AlbedoJob<'_>) {
+        kernels::albedo_each_lane(job, |params, wo, mode| self.albedo(params, wo, mode));
+    }
 }
 
 /// A named parameter set for the verification harness: the defaults with `set`
@@ -249,6 +277,15 @@ impl<M: Model> LobeType for Builtin<M> {
     fn albedo_tolerance(&self, params: &[f32]) -> f32 {
         M::albedo_tolerance(params)
     }
+    fn eval_lanes(&self, kernels: Kernels, job: &mut EvalJob<'_>) {
+        kernels::eval::<M>(kernels, job);
+    }
+    fn sample_lanes(&self, kernels: Kernels, job: &mut SampleJob<'_>) {
+        kernels::sample::<M>(kernels, job);
+    }
+    fn albedo_lanes(&self, kernels: Kernels, job: &mut AlbedoJob<'_>) {
+        kernels::albedo::<M>(kernels, job);
+    }
 }
 
 /// Lanes where both directions are strictly above the surface.
@@ -258,6 +295,7 @@ pub fn both_above<L: Lane>(wo: Vec3<L>, wi: Vec3<L>) -> L::Mask {
 }
 
 /// A sample where every lane failed.
+#[inline(always)]
 pub fn no_sample<L: Lane>() -> Sample<L> {
     Sample {
         wi: Vec3::new(L::zero(), L::zero(), L::zero()),

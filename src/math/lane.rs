@@ -11,6 +11,8 @@ use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub
 /// A per-lane boolean.
 pub trait Mask: Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self> {
     fn splat(value: bool) -> Self;
+    /// Bit `j` set when lane `j` is set.
+    fn bits(self) -> u32;
     /// True when at least one lane is set.
     fn any(self) -> bool;
     /// True when every lane is set.
@@ -33,8 +35,14 @@ pub trait Lane:
     + MulAssign
 {
     type Mask: Mask;
+    /// Number of `f32` lanes (1 for the scalar lane).
+    const LANES: usize;
 
     fn splat(value: f32) -> Self;
+    /// The first `LANES` values of `src`.
+    fn load(src: &[f32]) -> Self;
+    /// Write the lanes to the first `LANES` values of `dst`.
+    fn store(self, dst: &mut [f32]);
     fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
 
     fn lt(self, other: Self) -> Self::Mask;
@@ -51,17 +59,31 @@ pub trait Lane:
     /// `self * a + b`, fused where the ISA has FMA.
     fn mul_add(self, a: Self, b: Self) -> Self;
     fn sqrt(self) -> Self;
+    /// `1 / sqrt(self)`.
+    fn rsqrt(self) -> Self;
     fn exp(self) -> Self;
     fn ln(self) -> Self;
     /// `ln(1 + self)`, accurate for small arguments.
     fn ln_1p(self) -> Self;
     fn sin_cos(self) -> (Self, Self);
     fn acos(self) -> Self;
+    /// `atan2(self, x)`: the angle of the point `(x, self)`, in [-pi, pi].
+    fn atan2(self, x: Self) -> Self;
+    /// `self^e` for `self >= 0`.
+    fn pow(self, e: Self) -> Self;
     fn copysign(self, sign: Self) -> Self;
     /// The value of the first lane. Used only for parameters that are uniform across
     /// a batch group (enumerated choices), which the batch layer guarantees.
     fn lane0(self) -> f32;
     fn floor(self) -> Self;
+    /// Round to the nearest integer, ties to even.
+    fn round(self) -> Self;
+    /// `self * 2^e` for integral `e` in [-126, 127] (the building block of `exp`).
+    fn ldexp(self, e: Self) -> Self;
+    /// `(m, e)` with `self = m * 2^e`, `m` in [1, 2) and `e` integral, for finite
+    /// positive normal `self` (the building block of `ln`); other inputs give
+    /// unspecified finite values.
+    fn frexp(self) -> (Self, Self);
     /// `table[index]` per lane; `index` holds integral values in `0..table.len()`.
     fn gather(table: &[f32], index: Self) -> Self;
 
@@ -104,6 +126,10 @@ impl Mask for bool {
         value
     }
     #[inline(always)]
+    fn bits(self) -> u32 {
+        u32::from(self)
+    }
+    #[inline(always)]
     fn any(self) -> bool {
         self
     }
@@ -115,10 +141,19 @@ impl Mask for bool {
 
 impl Lane for f32 {
     type Mask = bool;
+    const LANES: usize = 1;
 
     #[inline(always)]
     fn splat(value: f32) -> Self {
         value
+    }
+    #[inline(always)]
+    fn load(src: &[f32]) -> Self {
+        src[0]
+    }
+    #[inline(always)]
+    fn store(self, dst: &mut [f32]) {
+        dst[0] = self;
     }
     #[inline(always)]
     fn select(mask: bool, if_true: Self, if_false: Self) -> Self {
@@ -170,6 +205,10 @@ impl Lane for f32 {
         f32::sqrt(self)
     }
     #[inline(always)]
+    fn rsqrt(self) -> Self {
+        1.0 / f32::sqrt(self)
+    }
+    #[inline(always)]
     fn exp(self) -> Self {
         f32::exp(self)
     }
@@ -190,6 +229,14 @@ impl Lane for f32 {
         f32::acos(self)
     }
     #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        f32::atan2(self, x)
+    }
+    #[inline(always)]
+    fn pow(self, e: Self) -> Self {
+        f32::powf(self, e)
+    }
+    #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         f32::copysign(self, sign)
     }
@@ -200,6 +247,21 @@ impl Lane for f32 {
     #[inline(always)]
     fn floor(self) -> Self {
         f32::floor(self)
+    }
+    #[inline(always)]
+    fn round(self) -> Self {
+        f32::round_ties_even(self)
+    }
+    #[inline(always)]
+    fn ldexp(self, e: Self) -> Self {
+        // 2^e built from its exponent bits: exact for e in [-126, 127].
+        self * f32::from_bits(((e as i32 + 127) as u32) << 23)
+    }
+    #[inline(always)]
+    fn frexp(self) -> (Self, Self) {
+        let bits = self.to_bits();
+        let e = ((bits >> 23) & 0xff) as i32 - 127;
+        (f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000), e as f32)
     }
     #[inline(always)]
     fn gather(table: &[f32], index: Self) -> Self {

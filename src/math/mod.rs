@@ -5,6 +5,7 @@ pub mod frame;
 pub mod lane;
 pub mod special;
 pub mod vec;
+pub mod vmath;
 
 pub use frame::Frame;
 pub use lane::{Lane, Mask};

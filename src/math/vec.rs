@@ -124,7 +124,11 @@ impl<L: Lane> Rgb<L> {
     }
     #[inline(always)]
     pub fn select(mask: L::Mask, a: Self, b: Self) -> Self {
-        a.zip(b, |x, y| L::select(mask, x, y))
+        a.zip(
+            b,
+            #[inline(always)]
+            |x, y| L::select(mask, x, y),
+        )
     }
     /// Rec. 709 luminance.
     #[inline(always)]
@@ -137,21 +141,32 @@ impl<L: Lane> Add for Rgb<L> {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: Self) -> Self {
-        self.zip(o, |a, b| a + b)
+        self.zip(
+            o,
+            #[inline(always)]
+            |a, b| a + b,
+        )
     }
 }
 impl<L: Lane> Mul for Rgb<L> {
     type Output = Self;
     #[inline(always)]
     fn mul(self, o: Self) -> Self {
-        self.zip(o, |a, b| a * b)
+        self.zip(
+            o,
+            #[inline(always)]
+            |a, b| a * b,
+        )
     }
 }
 impl<L: Lane> Mul<L> for Rgb<L> {
     type Output = Self;
     #[inline(always)]
     fn mul(self, s: L) -> Self {
-        self.map(|a| a * s)
+        self.map(
+            #[inline(always)]
+            |a| a * s,
+        )
     }
 }
 
@@ -172,7 +187,13 @@ impl Vec3<f32> {
                 format!("{what} = ({x}, {y}, {z}) is not finite"),
             ));
         }
-        // Normalize in f64 so tiny but nonzero inputs do not underflow.
+        // The batch kernels' rule, so scalar and batch calls see the same directions;
+        // lengths far from 1 are normalized in f64 so they neither underflow nor overflow.
+        let v = Vec3::new(x, y, z);
+        let len2 = v.length_squared();
+        if (1e-24..=1e24).contains(&len2) {
+            return Ok(v * (1.0 / len2.sqrt()));
+        }
         let (dx, dy, dz) = (f64::from(x), f64::from(y), f64::from(z));
         let len = (dx * dx + dy * dy + dz * dz).sqrt();
         if len < 1e-12 {

@@ -2,13 +2,16 @@
 
 use super::chi2::{self, Grid};
 use super::report::{CaseReport, Chi2Row, HardReport};
-use super::{Budget, ParamSet, Rng, corner_sets};
-use crate::batch::{self, BatchInput, EvalOutput, SampleOutput, SampleRandoms, Soa3, Soa3Mut};
+use super::{Budget, ParamSet, Rng, batch_difference, corner_sets};
+use crate::batch::{
+    self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, Threads,
+};
 use crate::closure::Closure;
 use crate::lobes::{LobeType, Sample, Transport, flags};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params::{self, ParamKind};
 use crate::registry::Registry;
+use crate::simd::Kernels;
 
 /// `wo` at `cos theta`, at an azimuth that differs per call so anisotropy is exercised.
 fn direction(cos_theta: f32, phi: f32) -> Vec3<f32> {
@@ -72,7 +75,8 @@ pub(super) fn verify_case(
     for wo in wo_set(lobe, budget.energy_cos_theta) {
         energy(lobe, p, wo, budget, rng, &mut report);
     }
-    report.batch_max_err = scalar_vs_batch(lobe, p, budget.batch_lanes, rng);
+    (report.batch_max_err, report.batch_sample_err) =
+        scalar_vs_batch(lobe, p, budget.batch_lanes, rng);
     report
 }
 
@@ -329,8 +333,15 @@ fn single_lobe_closure(lobe: &'static dyn LobeType, p: &[f32]) -> Closure {
 }
 
 /// The batch entry points against the scalar closure calls, on a closure holding
-/// only this lobe; every seventh lane inactive.
-fn scalar_vs_batch(lobe: &'static dyn LobeType, p: &[f32], lanes: usize, rng: &mut Rng) -> f64 {
+/// only this lobe, with every kernel set this CPU has; every seventh lane inactive.
+/// Returns the worst [`batch_difference`] of evaluations (eval, pdf, albedo) and of
+/// samples.
+fn scalar_vs_batch(
+    lobe: &'static dyn LobeType,
+    p: &[f32],
+    lanes: usize,
+    rng: &mut Rng,
+) -> (f64, f64) {
     let closure = single_lobe_closure(lobe, p);
     let dirs = |rng: &mut Rng| -> [Vec<f32>; 3] {
         let v: Vec<Vec3<f32>> = (0..lanes).map(|_| uniform_sphere(rng)).collect();
@@ -347,97 +358,125 @@ fn scalar_vs_batch(lobe: &'static dyn LobeType, p: &[f32], lanes: usize, rng: &m
         count: lanes,
         closures: &closure,
         active: Some(&active),
-        wo: Soa3 {
-            x: &wo[0],
-            y: &wo[1],
-            z: &wo[2],
-        },
+        wo: soa(&wo),
     };
-    let wi_soa = Soa3 {
-        x: &wi[0],
-        y: &wi[1],
-        z: &wi[2],
-    };
-    let mut value = [vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]];
-    let (mut pdf, mut pdf_rev, mut pdf_only) =
-        (vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]);
-    let [vr, vg, vb] = &mut value;
-    batch::eval(
-        &input,
-        wi_soa,
-        EvalOutput {
-            value: Soa3Mut {
-                x: vr,
-                y: vg,
-                z: vb,
-            },
-            pdf: &mut pdf,
-            pdf_reverse: Some(&mut pdf_rev),
-        },
-    )
-    .expect("valid batch");
-    batch::pdf(&input, wi_soa, &mut pdf_only).expect("valid batch");
-    let mut s_wi = [vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]];
-    let mut s_w = [vec![0.0; lanes], vec![0.0; lanes], vec![0.0; lanes]];
-    let mut s_pdf = vec![0.0; lanes];
-    let mut s_flags = vec![0u32; lanes];
-    let [wx, wy, wz] = &mut s_wi;
-    let [wr, wg, wb] = &mut s_w;
-    batch::sample(
-        &input,
-        SampleRandoms {
+    let expected: Vec<_> = (0..lanes)
+        .map(|i| {
+            // The scalar C entry points normalize exactly as the batch does.
+            let o = Vec3::try_unit(wo[0][i], wo[1][i], wo[2][i], "wo").expect("unit");
+            let w = Vec3::try_unit(wi[0][i], wi[1][i], wi[2][i], "wi").expect("unit");
+            let e = closure.eval(o, w).expect("finished closure");
+            let s = closure.sample(o, [u[0][i], u[1][i], u[2][i]]).ok();
+            (e, s, closure.albedo(o).expect("finished closure"))
+        })
+        .collect();
+    let (mut worst, mut worst_sample) = (0.0f64, 0.0f64);
+    for kernels in Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Caller,
+        };
+        let b = BatchResults::run(&exec, &input, soa(&wi), &u);
+        let mut cmp = |a: f32, b: f32| worst = worst.max(batch_difference(a, b));
+        let mut cmp_sample =
+            |a: f32, b: f32| worst_sample = worst_sample.max(batch_difference(a, b));
+        for i in (0..lanes).filter(|&i| active[i] != 0) {
+            let (e, s, albedo) = &expected[i];
+            for c in 0..3 {
+                cmp(b.value[c][i], e.value.to_array()[c]);
+                cmp(b.albedo[c][i], albedo.to_array()[c]);
+            }
+            cmp(b.pdf[i], e.pdf);
+            cmp(b.pdf_reverse[i], e.pdf_reverse);
+            cmp(b.pdf_only[i], e.pdf);
+            match s {
+                Some(s) => {
+                    for c in 0..3 {
+                        cmp_sample(b.s_wi[c][i], [s.wi.x, s.wi.y, s.wi.z][c]);
+                        cmp_sample(b.s_weight[c][i], s.weight.to_array()[c]);
+                    }
+                    cmp_sample(b.s_pdf[i], s.pdf);
+                    cmp_sample(b.s_flags[i] as f32, s.flags as f32);
+                }
+                None => cmp_sample(b.s_pdf[i], 0.0),
+            }
+        }
+    }
+    (worst, worst_sample)
+}
+
+fn soa(v: &[Vec<f32>; 3]) -> Soa3<'_> {
+    Soa3 {
+        x: &v[0],
+        y: &v[1],
+        z: &v[2],
+    }
+}
+
+fn soa_mut(v: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
+    let [x, y, z] = v;
+    Soa3Mut { x, y, z }
+}
+
+/// Every output of the batch entry points for one input.
+struct BatchResults {
+    value: [Vec<f32>; 3],
+    pdf: Vec<f32>,
+    pdf_reverse: Vec<f32>,
+    pdf_only: Vec<f32>,
+    albedo: [Vec<f32>; 3],
+    s_wi: [Vec<f32>; 3],
+    s_weight: [Vec<f32>; 3],
+    s_pdf: Vec<f32>,
+    s_flags: Vec<u32>,
+}
+
+impl BatchResults {
+    fn run(
+        exec: &Exec<'_>,
+        input: &BatchInput<'_, &Closure>,
+        wi: Soa3<'_>,
+        u: &[Vec<f32>; 3],
+    ) -> BatchResults {
+        let n = input.count;
+        let rows = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        let mut r = BatchResults {
+            value: rows(),
+            pdf: vec![0.0; n],
+            pdf_reverse: vec![0.0; n],
+            pdf_only: vec![0.0; n],
+            albedo: rows(),
+            s_wi: rows(),
+            s_weight: rows(),
+            s_pdf: vec![0.0; n],
+            s_flags: vec![0; n],
+        };
+        let out = EvalOutput {
+            value: soa_mut(&mut r.value),
+            pdf: &mut r.pdf,
+            pdf_reverse: Some(&mut r.pdf_reverse),
+        };
+        batch::eval(exec, input, wi, out).expect("valid batch");
+        batch::pdf(exec, input, wi, &mut r.pdf_only).expect("valid batch");
+        batch::albedo(exec, input, soa_mut(&mut r.albedo)).expect("valid batch");
+        let randoms = SampleRandoms {
             u_lobe: &u[0],
             u0: &u[1],
             u1: &u[2],
-        },
-        SampleOutput {
-            wi: Soa3Mut {
-                x: wx,
-                y: wy,
-                z: wz,
-            },
-            pdf: &mut s_pdf,
-            weight: Soa3Mut {
-                x: wr,
-                y: wg,
-                z: wb,
-            },
+        };
+        let out = SampleOutput {
+            wi: soa_mut(&mut r.s_wi),
+            pdf: &mut r.s_pdf,
+            weight: soa_mut(&mut r.s_weight),
             value: None,
-            flags: Some(&mut s_flags),
+            flags: Some(&mut r.s_flags),
             lobe: None,
             eta: None,
             roughness: None,
-        },
-    )
-    .expect("valid batch");
-    let mut worst = 0.0f64;
-    let mut cmp = |a: f32, b: f32| worst = worst.max(rel_err(f64::from(a), f64::from(b), 1e-12));
-    for i in (0..lanes).filter(|&i| active[i] != 0) {
-        // The scalar C entry points normalize exactly as the batch does.
-        let o = Vec3::try_unit(wo[0][i], wo[1][i], wo[2][i], "wo").expect("unit");
-        let w = Vec3::try_unit(wi[0][i], wi[1][i], wi[2][i], "wi").expect("unit");
-        let e = closure.eval(o, w).expect("finished closure");
-        for (c, v) in e.value.to_array().into_iter().enumerate() {
-            cmp(value[c][i], v);
-        }
-        cmp(pdf[i], e.pdf);
-        cmp(pdf_rev[i], e.pdf_reverse);
-        cmp(pdf_only[i], e.pdf);
-        match closure.sample(o, [u[0][i], u[1][i], u[2][i]]) {
-            Ok(s) => {
-                cmp(s_wi[0][i], s.wi.x);
-                cmp(s_wi[1][i], s.wi.y);
-                cmp(s_wi[2][i], s.wi.z);
-                cmp(s_pdf[i], s.pdf);
-                for (c, v) in s.weight.to_array().into_iter().enumerate() {
-                    cmp(s_w[c][i], v);
-                }
-                cmp(s_flags[i] as f32, s.flags as f32);
-            }
-            Err(_) => cmp(s_pdf[i], 0.0),
-        }
+        };
+        batch::sample(exec, input, randoms, out).expect("valid batch");
+        r
     }
-    worst
 }
 
 /// Directions the hard cases pair up: poles, grazing angles above and below, the

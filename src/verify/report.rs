@@ -1,6 +1,9 @@
 //! Harness results, pass/fail decisions, and the Markdown and JSON reports.
 
-use super::{BATCH_TOLERANCE, CHI2_ALPHA, CONSISTENCY_TOLERANCE, RECIPROCITY_TOLERANCE, Tier};
+use super::{
+    BATCH_SAMPLE_TOLERANCE, BATCH_TOLERANCE, CHI2_ALPHA, CONSISTENCY_TOLERANCE,
+    RECIPROCITY_TOLERANCE, Tier,
+};
 use serde_json::{Value, json};
 
 /// Allowed error of the pdf's integral over the sphere beyond 3 standard errors of the
@@ -54,6 +57,8 @@ pub struct CaseReport {
     /// The first albedo failure: where, what was claimed, what was estimated.
     pub albedo_failure_detail: Option<String>,
     pub batch_max_err: f64,
+    /// Worst batch-vs-scalar difference of sample outputs.
+    pub batch_sample_err: f64,
 }
 
 impl CaseReport {
@@ -73,6 +78,7 @@ impl CaseReport {
             albedo_failures: 0,
             albedo_failure_detail: None,
             batch_max_err: 0.0,
+            batch_sample_err: 0.0,
         }
     }
 
@@ -156,6 +162,12 @@ impl CaseReport {
                 self.batch_max_err
             ));
         }
+        if self.batch_sample_err > BATCH_SAMPLE_TOLERANCE {
+            out.push(format!(
+                "batch: samples differ from scalar by {:.3e}",
+                self.batch_sample_err
+            ));
+        }
         out
     }
 }
@@ -234,18 +246,26 @@ impl Report {
         let mut s = format!(
             "# Glint verification report\n\nTier: {:?}. Chi-square tests: {}, each at significance \
              {:.3e} (Sidak for an overall {CHI2_ALPHA}). Tolerances: consistency {CONSISTENCY_TOLERANCE:e}, \
-             reciprocity {RECIPROCITY_TOLERANCE:e}, batch {BATCH_TOLERANCE:e}, pdf integral \
+             reciprocity {RECIPROCITY_TOLERANCE:e}, batch {BATCH_TOLERANCE:e} (samples \
+             {BATCH_SAMPLE_TOLERANCE:e}; kernel sets compared: {}), pdf integral \
              {PDF_INTEGRAL_TOLERANCE:e} beyond 3 standard errors.\n\n\
-             | lobe | parameter set | chi2 min p | consistency max err | pdf integral err | reciprocity err | albedo min | albedo max | albedo(wo) rel err | batch max err | result |\n\
-             | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
-            self.tier, self.chi2_tests, self.alpha_per_test
+             | lobe | parameter set | chi2 min p | consistency max err | pdf integral err | reciprocity err | albedo min | albedo max | albedo(wo) rel err | batch max err | batch sample err | result |\n\
+             | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+            self.tier,
+            self.chi2_tests,
+            self.alpha_per_test,
+            crate::simd::Kernels::available()
+                .iter()
+                .map(|k| k.isa().name())
+                .collect::<Vec<_>>()
+                .join(", ")
         );
         for l in &self.lobes {
             for c in &l.cases {
                 let p = c.chi2_p_min();
                 let fails = c.failures(self.alpha_per_test);
                 s += &format!(
-                    "| {} | {} | {} | {:.2e} | {:.2e} | {} | {:.4} | {:.4} | {:.2e} | {:.1e} | {} |\n",
+                    "| {} | {} | {} | {:.2e} | {:.2e} | {} | {:.4} | {:.4} | {:.2e} | {:.1e} | {:.1e} | {} |\n",
                     l.lobe,
                     c.case,
                     if p.is_nan() {
@@ -261,6 +281,7 @@ impl Report {
                     c.albedo_max,
                     c.albedo_max_rel_err,
                     c.batch_max_err,
+                    c.batch_sample_err,
                     if fails.is_empty() {
                         "pass".to_string()
                     } else {
@@ -319,6 +340,7 @@ impl Report {
                     "albedo_max_rel_err": num(c.albedo_max_rel_err),
                     "albedo_failures": c.albedo_failures,
                     "batch_max_err": num(c.batch_max_err),
+                    "batch_sample_err": num(c.batch_sample_err),
                     "failures": c.failures(self.alpha_per_test),
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),

@@ -1,0 +1,383 @@
+//! Grouping and staging for the batch kernels: which lanes run together, and the
+//! padded SoA arrays they read and write. All buffers live in a per-thread
+//! [`Scratch`] that only grows, so steady-state batch calls do not allocate.
+
+use super::{BatchInput, ClosureSource, Soa3};
+use crate::closure::{Closure, check_randoms};
+use crate::error::Error;
+use crate::math::Vec3;
+use crate::simd::Kernels;
+use crate::simd::kernels::{LANE_MULTIPLE, LobeLanes, normalize};
+use std::cell::RefCell;
+use std::ops::Range;
+
+/// Lanes of one block whose closures have one shape (and, when sampling, chose
+/// the same lobe).
+pub(super) struct Group {
+    /// A lane whose closure represents the shape.
+    pub rep: usize,
+    /// Whether every lane has the representative's closure.
+    pub uniform: bool,
+    /// The chosen lobe (sampling only).
+    pub lobe: usize,
+    /// Global lane indices, ascending.
+    pub lanes: Vec<u32>,
+}
+
+/// Groups of a block, the lanes that failed before grouping, and the first error.
+#[derive(Default)]
+pub(super) struct Groups {
+    list: Vec<Group>,
+    used: usize,
+    /// Lanes that get zero outputs without being computed.
+    pub failed: Vec<u32>,
+    error: Option<(usize, Error)>,
+    /// Per block-local lane: the lobe-choice number rescaled for the chosen lobe.
+    pub u_reused: Vec<f32>,
+}
+
+/// The random numbers of a sampling call.
+#[derive(Clone, Copy)]
+pub(super) struct Randoms<'a> {
+    pub u: [&'a [f32]; 3],
+}
+
+impl Groups {
+    pub fn groups(&self) -> &[Group] {
+        &self.list[..self.used]
+    }
+
+    pub fn list_mut(&mut self) -> &mut [Group] {
+        &mut self.list[..self.used]
+    }
+
+    /// Record a lane's failure; the lowest lane's error is reported.
+    pub fn fail(&mut self, lane: usize, e: Error) {
+        if self.error.as_ref().is_none_or(|(l, _)| lane < *l) {
+            self.error = Some((lane, e));
+        }
+    }
+
+    /// The error of the lowest failing lane, prefixed with its index.
+    pub fn take_error(&mut self) -> Option<Error> {
+        self.error
+            .take()
+            .map(|(lane, e)| Error::new(e.status, format!("lane {lane}: {}", e.message)))
+    }
+
+    /// Group the active lanes of `range`. With `randoms`, each lane also chooses its
+    /// lobe (as `Closure::sample` does); lanes with nothing to choose fail silently.
+    pub fn build<'a, C: ClosureSource<'a>>(
+        &mut self,
+        input: &BatchInput<'a, C>,
+        range: Range<usize>,
+        randoms: Option<Randoms<'_>>,
+    ) {
+        self.used = 0;
+        self.failed.clear();
+        self.error = None;
+        self.u_reused.clear();
+        self.u_reused.resize(range.len(), 0.0);
+        let start = range.start;
+        if randoms.is_none() && input.active.is_none() && input.closures.is_shared() {
+            // One closure, every lane: one group, no per-lane work.
+            match input
+                .closures
+                .closure(start)
+                .and_then(|c| c.check_finished())
+            {
+                Ok(()) => {
+                    let g = self.find_or_add(input, start, 0);
+                    self.list[g].lanes.extend(range.map(|l| l as u32));
+                }
+                Err(e) => {
+                    self.failed.extend(range.map(|l| l as u32));
+                    self.fail(start, e);
+                }
+            }
+            return;
+        }
+        // The previous lane's closure and group: consecutive lanes usually match.
+        let mut previous: Option<(*const Closure, usize, usize)> = None;
+        for lane in range {
+            if !input.is_active(lane) {
+                continue;
+            }
+            let closure = match input.closures.closure(lane).and_then(|c| {
+                c.check_finished()?;
+                Ok(c)
+            }) {
+                Ok(c) => c,
+                Err(e) => {
+                    self.failed.push(lane as u32);
+                    self.fail(lane, e);
+                    continue;
+                }
+            };
+            let lobe = match randoms {
+                None => 0,
+                Some(r) => {
+                    let u = [r.u[0][lane], r.u[1][lane], r.u[2][lane]];
+                    let choice = check_randoms(u).map(|()| closure.choose_lobe(u[0]));
+                    match choice {
+                        Ok(Some((k, u_reused))) => {
+                            self.u_reused[lane - start] = u_reused;
+                            k
+                        }
+                        Ok(None) => {
+                            self.failed.push(lane as u32);
+                            continue;
+                        }
+                        Err(e) => {
+                            self.failed.push(lane as u32);
+                            self.fail(lane, e);
+                            continue;
+                        }
+                    }
+                }
+            };
+            let ptr = closure as *const Closure;
+            let g = match previous {
+                Some((p, k, g)) if p == ptr && k == lobe => g,
+                _ => self.find_or_add(input, lane, lobe),
+            };
+            let group = &mut self.list[g];
+            group.lanes.push(lane as u32);
+            group.uniform &= std::ptr::eq(
+                input.closures.closure(group.rep).expect("resolved before"),
+                closure,
+            ) || input.closures.is_shared();
+            previous = Some((ptr, lobe, g));
+        }
+    }
+
+    /// The group of `lane`'s closure shape and `lobe`, created if new.
+    fn find_or_add<'a, C: ClosureSource<'a>>(
+        &mut self,
+        input: &BatchInput<'a, C>,
+        lane: usize,
+        lobe: usize,
+    ) -> usize {
+        let closure = input.closures.closure(lane).expect("resolved before");
+        let found = self.groups().iter().position(|g| {
+            g.lobe == lobe
+                && closure.same_shape(input.closures.closure(g.rep).expect("resolved before"))
+        });
+        found.unwrap_or_else(|| {
+            if self.used == self.list.len() {
+                self.list.push(Group {
+                    rep: 0,
+                    uniform: true,
+                    lobe: 0,
+                    lanes: Vec::new(),
+                });
+            }
+            let g = &mut self.list[self.used];
+            g.rep = lane;
+            g.uniform = true;
+            g.lobe = lobe;
+            g.lanes.clear();
+            self.used += 1;
+            self.used - 1
+        })
+    }
+}
+
+/// Grow `v` to at least `len` values (never shrinks, never zeroes).
+fn grow<T: Copy + Default>(v: &mut Vec<T>, len: usize) -> &mut [T] {
+    if v.len() < len {
+        v.resize(len, T::default());
+    }
+    &mut v[..len]
+}
+
+pub(super) fn grow_f32(v: &mut Vec<f32>, len: usize) -> &mut [f32] {
+    grow(v, len)
+}
+
+pub(super) fn grow_u8(v: &mut Vec<u8>, len: usize) -> &mut [u8] {
+    grow(v, len)
+}
+
+/// `len` values of each of three rows.
+pub(super) fn rows3(v: &mut [Vec<f32>; 3], len: usize) -> [&mut [f32]; 3] {
+    let [a, b, c] = v;
+    [grow(a, len), grow(b, len), grow(c, len)]
+}
+
+/// Read-only views of three rows.
+pub(super) fn view3(v: &[Vec<f32>; 3], len: usize) -> [&[f32]; 3] {
+    [&v[0][..len], &v[1][..len], &v[2][..len]]
+}
+
+/// A group's length rounded up to whole registers.
+pub(super) fn padded(lanes: usize) -> usize {
+    lanes.div_ceil(LANE_MULTIPLE) * LANE_MULTIPLE
+}
+
+/// Stage `src` at `lanes` into `dst`, normalized, padding to `len` with +z. Lanes
+/// with invalid directions are flagged in `failed`, reported through `groups`, and
+/// staged as +z; returns whether there were any.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn stage_directions(
+    kernels: Kernels,
+    src: Soa3<'_>,
+    what: &str,
+    lanes: &[u32],
+    len: usize,
+    dst: &mut [Vec<f32>; 3],
+    failed: &mut [u8],
+    groups: &mut Groups,
+) -> bool {
+    let mut rows = rows3(dst, len);
+    let n = lanes.len();
+    let sources = [src.x, src.y, src.z];
+    match (lanes.first(), lanes.last()) {
+        (Some(&a), Some(&b)) if (b - a) as usize + 1 == n => {
+            for (row, src) in rows.iter_mut().zip(sources) {
+                row[..n].copy_from_slice(&src[a as usize..=b as usize]);
+            }
+        }
+        _ => {
+            for (row, src) in rows.iter_mut().zip(sources) {
+                for (r, &lane) in row.iter_mut().zip(lanes) {
+                    *r = src[lane as usize];
+                }
+            }
+        }
+    }
+    for (row, pad) in rows.iter_mut().zip([0.0, 0.0, 1.0]) {
+        row[n..].fill(pad);
+    }
+    if !normalize(kernels, &mut rows, len) {
+        return false;
+    }
+    // Some lane is invalid, or tiny or huge: stage the group as the scalar path does.
+    let mut any_failed = false;
+    for (j, &lane) in lanes.iter().enumerate() {
+        let lane = lane as usize;
+        let v = Vec3::try_unit(src.x[lane], src.y[lane], src.z[lane], what).unwrap_or_else(|e| {
+            failed[j] = 1;
+            any_failed = true;
+            groups.fail(lane, e);
+            Vec3::new(0.0, 0.0, 1.0)
+        });
+        rows[0][j] = v.x;
+        rows[1][j] = v.y;
+        rows[2][j] = v.z;
+    }
+    any_failed
+}
+
+/// Staged per-lane data of one lobe for groups whose lanes have different closures.
+#[derive(Default)]
+pub(super) struct LobeRows {
+    params: Vec<f32>,
+    frame: Vec<f32>,
+    weight: Vec<f32>,
+    probability: Vec<f32>,
+}
+
+impl LobeRows {
+    /// Lobe `k` of the group's closures, as the kernels read it.
+    pub fn lanes<'s, 'a: 's, C: ClosureSource<'a>>(
+        &'s mut self,
+        input: &BatchInput<'a, C>,
+        group: &Group,
+        k: usize,
+        len: usize,
+    ) -> LobeLanes<'s> {
+        let closure_of = |lane: usize| input.closures.closure(lane).expect("resolved before");
+        let rep = closure_of(group.rep);
+        if group.uniform {
+            let l = &rep.lobes()[k];
+            return LobeLanes::Uniform {
+                params: rep.lobe_params(k),
+                frame: l.frame,
+                weight: l.weight,
+                probability: l.probability,
+            };
+        }
+        let param_count = rep.lobe_params(k).len();
+        let params = grow(&mut self.params, param_count * len);
+        let frame = grow(&mut self.frame, 9 * len);
+        let weight = grow(&mut self.weight, 3 * len);
+        let probability = grow(&mut self.probability, len);
+        // Padding lanes repeat the first lane, so they hold valid parameters.
+        let lane_at = |j: usize| group.lanes[j.min(group.lanes.len() - 1)] as usize;
+        for j in 0..len {
+            let c = closure_of(lane_at(j));
+            let l = &c.lobes()[k];
+            for (p, &v) in c.lobe_params(k).iter().enumerate() {
+                params[p * len + j] = v;
+            }
+            let axes = [l.frame.t, l.frame.b, l.frame.n];
+            for (a, axis) in axes.iter().enumerate() {
+                frame[3 * a * len + j] = axis.x;
+                frame[(3 * a + 1) * len + j] = axis.y;
+                frame[(3 * a + 2) * len + j] = axis.z;
+            }
+            for (c, w) in l.weight.to_array().into_iter().enumerate() {
+                weight[c * len + j] = w;
+            }
+            probability[j] = l.probability;
+        }
+        LobeLanes::PerLane {
+            params,
+            param_count,
+            frame,
+            weight,
+            probability,
+            stride: len,
+        }
+    }
+}
+
+/// Every buffer a block needs.
+#[derive(Default)]
+pub(super) struct Scratch {
+    pub groups: Groups,
+    pub lobe: LobeRows,
+    pub wo: [Vec<f32>; 3],
+    pub wi: [Vec<f32>; 3],
+    pub u: [Vec<f32>; 3],
+    pub failed: Vec<u8>,
+    /// Whether any lane of the current group is flagged in `failed`.
+    pub any_failed: bool,
+    /// Accumulated value, pdf and reverse pdf.
+    pub value: [Vec<f32>; 3],
+    pub pdf: Vec<f32>,
+    pub pdf_reverse: Vec<f32>,
+    /// The chosen lobe's sample.
+    pub sample_value: [Vec<f32>; 3],
+    pub sample_pdf: Vec<f32>,
+    pub eta: Vec<f32>,
+    pub roughness: Vec<f32>,
+    pub events: Vec<u8>,
+}
+
+impl Scratch {
+    /// Zero the accumulators and failure flags for a group of `len` lanes.
+    pub fn reset(&mut self, len: usize) {
+        for row in rows3(&mut self.value, len) {
+            row.fill(0.0);
+        }
+        grow(&mut self.pdf, len).fill(0.0);
+        grow(&mut self.pdf_reverse, len).fill(0.0);
+        grow(&mut self.failed, len).fill(0);
+        self.any_failed = false;
+    }
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// Run `f` with this thread's scratch buffers.
+pub(super) fn with_scratch<R>(f: impl FnOnce(&mut Scratch) -> R) -> R {
+    SCRATCH.with(|s| match s.try_borrow_mut() {
+        Ok(mut s) => f(&mut s),
+        // Reentered (a lobe callback calling the batch API): use fresh buffers.
+        Err(_) => f(&mut Scratch::default()),
+    })
+}

@@ -1,0 +1,258 @@
+//! The AVX-512 lane: sixteen `f32` in a `__m512`, masks in a `__mmask16`.
+//! Only AVX-512 Foundation instructions are used (integer forms for bit logic,
+//! since the `_ps` logic ops need AVX-512DQ).
+
+use super::{compound_assign, intrinsic, newton_rsqrt};
+use crate::math::{Lane, Mask, vmath};
+use std::arch::x86_64::*;
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+/// Sixteen `f32` lanes.
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub struct F32x16(__m512);
+
+/// Sixteen lane flags, one bit each.
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub struct M16(__mmask16);
+
+macro_rules! binary_op {
+    ($trait:ident $method:ident $intr:ident) => {
+        impl $trait for F32x16 {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                F32x16(intrinsic!($intr(self.0, o.0)))
+            }
+        }
+    };
+}
+
+binary_op!(Add add _mm512_add_ps);
+binary_op!(Sub sub _mm512_sub_ps);
+binary_op!(Mul mul _mm512_mul_ps);
+binary_op!(Div div _mm512_div_ps);
+compound_assign!(F32x16);
+
+impl F32x16 {
+    #[inline(always)]
+    fn bits(self) -> __m512i {
+        intrinsic!(_mm512_castps_si512(self.0))
+    }
+    #[inline(always)]
+    fn from_bits(bits: __m512i) -> Self {
+        F32x16(intrinsic!(_mm512_castsi512_ps(bits)))
+    }
+    #[inline(always)]
+    fn cmp<const OP: i32>(self, o: Self) -> M16 {
+        M16(intrinsic!(_mm512_cmp_ps_mask::<OP>(self.0, o.0)))
+    }
+}
+
+const SIGN: i32 = i32::MIN;
+
+impl Neg for F32x16 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self::from_bits(intrinsic!(_mm512_xor_si512(
+            self.bits(),
+            _mm512_set1_epi32(SIGN)
+        )))
+    }
+}
+
+impl BitAnd for M16 {
+    type Output = Self;
+    #[inline(always)]
+    fn bitand(self, o: Self) -> Self {
+        M16(self.0 & o.0)
+    }
+}
+impl BitOr for M16 {
+    type Output = Self;
+    #[inline(always)]
+    fn bitor(self, o: Self) -> Self {
+        M16(self.0 | o.0)
+    }
+}
+impl Not for M16 {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        M16(!self.0)
+    }
+}
+
+impl Mask for M16 {
+    #[inline(always)]
+    fn splat(value: bool) -> Self {
+        M16(if value { 0xffff } else { 0 })
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        u32::from(self.0)
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        self.0 != 0
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        self.0 == 0xffff
+    }
+}
+
+impl Lane for F32x16 {
+    type Mask = M16;
+    const LANES: usize = 16;
+
+    #[inline(always)]
+    fn splat(value: f32) -> Self {
+        F32x16(intrinsic!(_mm512_set1_ps(value)))
+    }
+    #[inline(always)]
+    fn load(src: &[f32]) -> Self {
+        let src = &src[..16];
+        F32x16(intrinsic!(_mm512_loadu_ps(src.as_ptr())))
+    }
+    #[inline(always)]
+    fn store(self, dst: &mut [f32]) {
+        let dst = &mut dst[..16];
+        intrinsic!(_mm512_storeu_ps(dst.as_mut_ptr(), self.0))
+    }
+    #[inline(always)]
+    fn select(mask: M16, if_true: Self, if_false: Self) -> Self {
+        F32x16(intrinsic!(_mm512_mask_blend_ps(
+            mask.0, if_false.0, if_true.0
+        )))
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> M16 {
+        self.cmp::<_CMP_LT_OQ>(o)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> M16 {
+        self.cmp::<_CMP_LE_OQ>(o)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> M16 {
+        self.cmp::<_CMP_GT_OQ>(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> M16 {
+        self.cmp::<_CMP_GE_OQ>(o)
+    }
+    #[inline(always)]
+    fn eq(self, o: Self) -> M16 {
+        self.cmp::<_CMP_EQ_OQ>(o)
+    }
+    #[inline(always)]
+    fn is_finite(self) -> M16 {
+        self.abs().lt(Self::splat(f32::INFINITY))
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        F32x16(intrinsic!(_mm512_abs_ps(self.0)))
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        // As minps: a NaN `self` gives `o`, as `f32::min` does.
+        F32x16(intrinsic!(_mm512_min_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        F32x16(intrinsic!(_mm512_max_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        F32x16(intrinsic!(_mm512_fmadd_ps(self.0, a.0, b.0)))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        F32x16(intrinsic!(_mm512_sqrt_ps(self.0)))
+    }
+    /// The 14-bit hardware estimate refined by one Newton step (see `newton_rsqrt`).
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        let y = F32x16(intrinsic!(_mm512_rsqrt14_ps(self.0)));
+        newton_rsqrt(self, y)
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        vmath::exp(self)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        vmath::ln(self)
+    }
+    #[inline(always)]
+    fn ln_1p(self) -> Self {
+        vmath::ln_1p(self)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        vmath::sin_cos(self)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        vmath::acos(self)
+    }
+    #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        vmath::atan2(self, x)
+    }
+    #[inline(always)]
+    fn pow(self, e: Self) -> Self {
+        vmath::pow(self, e)
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        // Ternary logic 0xE4 = (C & A) | (!C & B) with C the sign mask: sign bit from
+        // `sign`, the rest from `self`.
+        Self::from_bits(intrinsic!(_mm512_ternarylogic_epi32::<0xE4>(
+            sign.bits(),
+            self.bits(),
+            _mm512_set1_epi32(SIGN)
+        )))
+    }
+    #[inline(always)]
+    fn lane0(self) -> f32 {
+        intrinsic!(_mm512_cvtss_f32(self.0))
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        F32x16(intrinsic!(_mm512_roundscale_ps::<
+            { _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC },
+        >(self.0)))
+    }
+    #[inline(always)]
+    fn round(self) -> Self {
+        F32x16(intrinsic!(_mm512_roundscale_ps::<
+            { _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC },
+        >(self.0)))
+    }
+    #[inline(always)]
+    fn ldexp(self, e: Self) -> Self {
+        F32x16(intrinsic!(_mm512_scalef_ps(self.0, e.0)))
+    }
+    #[inline(always)]
+    fn frexp(self) -> (Self, Self) {
+        let mantissa = intrinsic!(_mm512_getmant_ps::<_MM_MANT_NORM_1_2, _MM_MANT_SIGN_ZERO>(
+            self.0
+        ));
+        let exponent = intrinsic!(_mm512_getexp_ps(self.0));
+        (F32x16(mantissa), F32x16(exponent))
+    }
+    #[inline(always)]
+    fn gather(table: &[f32], index: Self) -> Self {
+        assert!(!table.is_empty() && table.len() <= i32::MAX as usize);
+        // Clamped into the table, so no lane can read outside it (NaN -> 0).
+        let index = intrinsic!(_mm512_min_epi32(
+            _mm512_max_epi32(_mm512_cvttps_epi32(index.0), _mm512_setzero_si512()),
+            _mm512_set1_epi32(table.len() as i32 - 1)
+        ));
+        F32x16(intrinsic!(_mm512_i32gather_ps::<4>(index, table.as_ptr())))
+    }
+}

@@ -1,0 +1,429 @@
+//! The batch kernels on mixed batches: per-lane closures of many shapes (different
+//! lobe types, counts, enumerated choices, transports and frames), inactive and
+//! invalid lanes, several blocks; every kernel set this CPU has, compared lane by
+//! lane with the scalar closure calls; and results independent of the thread count.
+
+mod common;
+
+use common::{Block, Rng, lobe};
+use glint::batch::{
+    self, BLOCK, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, Threads,
+};
+use glint::lobes::Transport;
+use glint::math::{Frame, Vec3};
+use glint::registry::Registry;
+use glint::simd::Kernels;
+use glint::verify::{BATCH_SAMPLE_TOLERANCE, BATCH_TOLERANCE, batch_difference};
+use glint::{Closure, Runtime, Status};
+
+/// A unit vector from three uniforms.
+fn sphere(rng: &mut Rng) -> Vec3<f32> {
+    let z = 1.0 - 2.0 * rng.f32();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * rng.f32();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Closures of different shapes: each entry is (lobe name, parameter block) lists.
+fn closures(rng: &mut Rng) -> Vec<Closure> {
+    let registry = Registry::with_builtins();
+    let conductor = || Block::defaults(lobe("conductor"));
+    let shapes: Vec<(Transport, Vec<(&str, Block)>)> = vec![
+        (
+            Transport::Radiance,
+            vec![("lambert", Block::defaults(lobe("lambert")))],
+        ),
+        (
+            Transport::Radiance,
+            vec![("conductor", conductor().float("roughness", 0.4))],
+        ),
+        (
+            Transport::Radiance,
+            vec![(
+                "conductor",
+                conductor()
+                    .choice("distribution", "beckmann")
+                    .choice("fresnel", "conductor")
+                    .float("anisotropic", 0.6),
+            )],
+        ),
+        (
+            Transport::Radiance,
+            vec![
+                ("lambert", Block::defaults(lobe("lambert"))),
+                ("conductor", conductor().float("roughness", 0.2)),
+            ],
+        ),
+        (
+            Transport::Radiance,
+            vec![(
+                "dielectric",
+                Block::defaults(lobe("dielectric")).float("roughness", 0.3),
+            )],
+        ),
+        (
+            Transport::Importance,
+            vec![(
+                "dielectric",
+                Block::defaults(lobe("dielectric")).float("roughness", 0.5),
+            )],
+        ),
+        (
+            Transport::Radiance,
+            vec![
+                ("mirror", Block::defaults(lobe("mirror"))),
+                ("lambert", Block::defaults(lobe("lambert"))),
+                (
+                    "dielectric",
+                    Block::defaults(lobe("dielectric")).float("roughness", 0.0),
+                ),
+            ],
+        ),
+    ];
+    let mut out = Vec::new();
+    // Two closures per shape, with different parameters and frames, so groups mix
+    // closures of one shape (per-lane parameters) as well as shapes.
+    for copy in 0..2 {
+        for (mode, lobes) in &shapes {
+            let wo = (copy == 1).then(|| sphere(rng));
+            let mut c = Closure::new(wo, *mode);
+            for (name, block) in lobes {
+                let id = registry.find(name).unwrap();
+                let mut block = block.clone();
+                if copy == 1 && *name != "lambert" && *name != "mirror" {
+                    let roughness = block.offset("roughness");
+                    let r = block.values[roughness];
+                    block.values[roughness] = (r + 0.1 * rng.f32()).min(1.0);
+                }
+                let weight = [0.3 + 0.7 * rng.f32(), 0.5, 0.9];
+                let frame = Frame::new(sphere(rng), None);
+                c.add_lobe(&registry, id, weight, frame, Some(block.as_slice()))
+                    .unwrap();
+            }
+            c.finish().unwrap();
+            out.push(c);
+        }
+    }
+    out
+}
+
+struct Lanes {
+    wo: [Vec<f32>; 3],
+    wi: [Vec<f32>; 3],
+    u: [Vec<f32>; 3],
+    active: Vec<u8>,
+    which: Vec<usize>,
+}
+
+fn lanes(n: usize, shapes: usize, rng: &mut Rng) -> Lanes {
+    let mut l = Lanes {
+        wo: Default::default(),
+        wi: Default::default(),
+        u: Default::default(),
+        active: Vec::new(),
+        which: Vec::new(),
+    };
+    for i in 0..n {
+        let (o, w) = (sphere(rng), sphere(rng));
+        // Unnormalized inputs are normalized by the batch as by the scalar calls.
+        let s = if i % 5 == 0 { 3.5 } else { 1.0 };
+        for (c, (a, b)) in [(o.x, w.x), (o.y, w.y), (o.z, w.z)].into_iter().enumerate() {
+            l.wo[c].push(a * s);
+            l.wi[c].push(b);
+            l.u[c].push(rng.f32());
+        }
+        l.active.push(u8::from(i % 11 != 3));
+        // Runs of one closure, then switches, as a scanline host would have.
+        l.which.push(if i % 64 < 40 {
+            (i / 64) % shapes
+        } else {
+            (rng.next_u64() as usize) % shapes
+        });
+    }
+    l
+}
+
+fn soa(v: &[Vec<f32>; 3]) -> Soa3<'_> {
+    Soa3 {
+        x: &v[0],
+        y: &v[1],
+        z: &v[2],
+    }
+}
+
+fn soa_mut(v: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
+    let [x, y, z] = v;
+    Soa3Mut { x, y, z }
+}
+
+/// Every batch output for one input.
+#[derive(PartialEq, Debug)]
+struct Outputs {
+    value: [Vec<f32>; 3],
+    pdf: Vec<f32>,
+    pdf_reverse: Vec<f32>,
+    pdf_only: Vec<f32>,
+    albedo: [Vec<f32>; 3],
+    s_wi: [Vec<f32>; 3],
+    s_weight: [Vec<f32>; 3],
+    s_value: [Vec<f32>; 3],
+    s_pdf: Vec<f32>,
+    s_flags: Vec<u32>,
+    s_lobe: Vec<u32>,
+    s_eta: Vec<f32>,
+    s_roughness: Vec<f32>,
+}
+
+/// Run every batch entry point; `Err` carries each call's error.
+fn run(
+    exec: &Exec<'_>,
+    per_lane: &[&Closure],
+    l: &Lanes,
+) -> (Outputs, Vec<Result<(), glint::Error>>) {
+    let n = per_lane.len();
+    // Outputs start at a sentinel so lanes left untouched are visible.
+    let rows = || [vec![-7.0; n], vec![-7.0; n], vec![-7.0; n]];
+    let mut o = Outputs {
+        value: rows(),
+        pdf: vec![-7.0; n],
+        pdf_reverse: vec![-7.0; n],
+        pdf_only: vec![-7.0; n],
+        albedo: rows(),
+        s_wi: rows(),
+        s_weight: rows(),
+        s_value: rows(),
+        s_pdf: vec![-7.0; n],
+        s_flags: vec![99; n],
+        s_lobe: vec![99; n],
+        s_eta: vec![-7.0; n],
+        s_roughness: vec![-7.0; n],
+    };
+    let input = BatchInput {
+        count: n,
+        closures: per_lane,
+        active: Some(&l.active),
+        wo: soa(&l.wo),
+    };
+    let eval = batch::eval(
+        exec,
+        &input,
+        soa(&l.wi),
+        EvalOutput {
+            value: soa_mut(&mut o.value),
+            pdf: &mut o.pdf,
+            pdf_reverse: Some(&mut o.pdf_reverse),
+        },
+    );
+    let pdf = batch::pdf(exec, &input, soa(&l.wi), &mut o.pdf_only);
+    let albedo = batch::albedo(exec, &input, soa_mut(&mut o.albedo));
+    let sample = batch::sample(
+        exec,
+        &input,
+        SampleRandoms {
+            u_lobe: &l.u[0],
+            u0: &l.u[1],
+            u1: &l.u[2],
+        },
+        SampleOutput {
+            wi: soa_mut(&mut o.s_wi),
+            pdf: &mut o.s_pdf,
+            weight: soa_mut(&mut o.s_weight),
+            value: Some(soa_mut(&mut o.s_value)),
+            flags: Some(&mut o.s_flags),
+            lobe: Some(&mut o.s_lobe),
+            eta: Some(&mut o.s_eta),
+            roughness: Some(&mut o.s_roughness),
+        },
+    );
+    let results = vec![eval, pdf, albedo, sample];
+    (o, results)
+}
+
+/// Compare every active lane with the scalar closure calls; returns the worst
+/// `batch_difference` of evaluations and of samples.
+fn worst_difference(per_lane: &[&Closure], l: &Lanes, o: &Outputs) -> (f64, f64) {
+    let (mut worst, mut worst_sample) = (0.0f64, 0.0f64);
+    for (i, &c) in per_lane.iter().enumerate() {
+        if l.active[i] == 0 {
+            assert_eq!(o.pdf[i], -7.0, "inactive lane {i} was written");
+            assert_eq!(o.s_flags[i], 99, "inactive lane {i} was written");
+            continue;
+        }
+        let wo = Vec3::try_unit(l.wo[0][i], l.wo[1][i], l.wo[2][i], "wo").unwrap();
+        let wi = Vec3::try_unit(l.wi[0][i], l.wi[1][i], l.wi[2][i], "wi").unwrap();
+        let mut cmp = |a: f32, b: f32, what: &str| {
+            let d = batch_difference(a, b);
+            assert!(d.is_finite(), "lane {i} {what}: batch {a}, scalar {b}");
+            if what.starts_with("s_") {
+                worst_sample = worst_sample.max(d);
+            } else {
+                worst = worst.max(d);
+            }
+        };
+        let e = c.eval(wo, wi).unwrap();
+        for k in 0..3 {
+            cmp(o.value[k][i], e.value.to_array()[k], "value");
+            cmp(
+                o.albedo[k][i],
+                c.albedo(wo).unwrap().to_array()[k],
+                "albedo",
+            );
+        }
+        cmp(o.pdf[i], e.pdf, "pdf");
+        cmp(o.pdf_only[i], e.pdf, "pdf_only");
+        cmp(o.pdf_reverse[i], e.pdf_reverse, "pdf_reverse");
+        match c.sample(wo, [l.u[0][i], l.u[1][i], l.u[2][i]]) {
+            Ok(s) => {
+                assert_eq!(o.s_flags[i], s.flags, "lane {i} flags");
+                assert_eq!(o.s_lobe[i], s.lobe, "lane {i} lobe");
+                for k in 0..3 {
+                    cmp(o.s_wi[k][i], [s.wi.x, s.wi.y, s.wi.z][k], "s_wi");
+                    cmp(o.s_weight[k][i], s.weight.to_array()[k], "s_weight");
+                    cmp(o.s_value[k][i], s.value.to_array()[k], "s_value");
+                }
+                cmp(o.s_pdf[i], s.pdf, "s_pdf");
+                cmp(o.s_eta[i], s.eta, "s_eta");
+                cmp(o.s_roughness[i], s.roughness, "s_roughness");
+            }
+            Err(e) => {
+                assert_eq!(e.status, Status::NoSample);
+                assert_eq!(
+                    (o.s_pdf[i], o.s_flags[i]),
+                    (0.0, 0),
+                    "lane {i}: failed sample"
+                );
+            }
+        }
+    }
+    (worst, worst_sample)
+}
+
+#[test]
+fn mixed_batches_match_the_scalar_calls_on_every_isa() {
+    let mut rng = Rng::new(7);
+    let all = closures(&mut rng);
+    let n = 2 * BLOCK + 777;
+    let l = lanes(n, all.len(), &mut rng);
+    let per_lane: Vec<&Closure> = l.which.iter().map(|&k| &all[k]).collect();
+    for kernels in Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Caller,
+        };
+        let (o, results) = run(&exec, &per_lane, &l);
+        for r in results {
+            r.unwrap();
+        }
+        let (worst, worst_sample) = worst_difference(&per_lane, &l, &o);
+        println!(
+            "{:?}: worst difference {worst:.3e}, samples {worst_sample:.3e}",
+            kernels.isa()
+        );
+        assert!(worst <= BATCH_TOLERANCE, "{:?}: {worst:.3e}", kernels.isa());
+        assert!(
+            worst_sample <= BATCH_SAMPLE_TOLERANCE,
+            "{:?}: samples {worst_sample:.3e}",
+            kernels.isa()
+        );
+    }
+}
+
+#[test]
+fn one_shared_closure_matches_per_lane_closures() {
+    let mut rng = Rng::new(11);
+    let all = closures(&mut rng);
+    let n = 1000;
+    let l = lanes(n, 1, &mut rng);
+    for c in &all {
+        let per_lane: Vec<&Closure> = vec![c; n];
+        for kernels in Kernels::available() {
+            let exec = Exec {
+                kernels,
+                threads: Threads::Caller,
+            };
+            let (per, _) = run(&exec, &per_lane, &l);
+            let input_shared = BatchInput {
+                count: n,
+                closures: c,
+                active: Some(&l.active[..]),
+                wo: soa(&l.wo),
+            };
+            let mut pdf = vec![-7.0; n];
+            batch::pdf(&exec, &input_shared, soa(&l.wi), &mut pdf).unwrap();
+            assert_eq!(pdf, per.pdf_only, "{:?}", kernels.isa());
+        }
+    }
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let mut rng = Rng::new(5);
+    let all = closures(&mut rng);
+    let n = 5 * BLOCK + 123;
+    let l = lanes(n, all.len(), &mut rng);
+    let per_lane: Vec<&Closure> = l.which.iter().map(|&k| &all[k]).collect();
+    let reference = run(&Runtime::new("threads=1").unwrap().exec(), &per_lane, &l).0;
+    for config in ["threads=2", "threads=3", ""] {
+        let rt = Runtime::new(config).unwrap();
+        let (o, results) = run(&rt.exec(), &per_lane, &l);
+        assert!(results.iter().all(Result::is_ok));
+        assert!(o == reference, "{config}: results differ from threads=1");
+    }
+}
+
+#[test]
+fn bad_lanes_are_zeroed_and_reported_and_the_rest_computed() {
+    let mut rng = Rng::new(3);
+    let all = closures(&mut rng);
+    let n = BLOCK + 100;
+    let mut l = lanes(n, all.len(), &mut rng);
+    l.active.fill(1);
+    // Lane BLOCK + 5: NaN wo; lane 40: zero-length wo (the first bad lane); lane 41:
+    // a non-finite random number; lane 42: an unfinished closure.
+    l.wo[0][BLOCK + 5] = f32::NAN;
+    for c in 0..3 {
+        l.wo[c][40] = 0.0;
+    }
+    l.u[1][41] = f32::INFINITY;
+    let unfinished = Closure::new(None, Transport::Radiance);
+    let mut per_lane: Vec<&Closure> = l.which.iter().map(|&k| &all[k]).collect();
+    per_lane[42] = &unfinished;
+    for kernels in Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Global,
+        };
+        let (o, results) = run(&exec, &per_lane, &l);
+        let [eval, pdf, albedo, sample] = results.try_into().unwrap();
+        for (what, r, status) in [
+            ("eval", eval, Status::InvalidArgument),
+            ("pdf", pdf, Status::InvalidArgument),
+            ("albedo", albedo, Status::InvalidArgument),
+            ("sample", sample, Status::InvalidArgument),
+        ] {
+            let e = r.expect_err(what);
+            assert_eq!(e.status, status, "{what}: {}", e.message);
+            assert!(
+                e.message.starts_with("lane 40: wo"),
+                "{what}: {}",
+                e.message
+            );
+        }
+        for bad in [40, 42, BLOCK + 5] {
+            assert_eq!(o.pdf[bad], 0.0);
+            assert_eq!(o.value[0][bad], 0.0);
+            assert_eq!(o.albedo[1][bad], 0.0);
+            assert_eq!((o.s_pdf[bad], o.s_flags[bad]), (0.0, 0));
+        }
+        assert_eq!((o.s_pdf[41], o.s_flags[41]), (0.0, 0));
+        // Every other lane is computed as usual.
+        for i in (0..n).filter(|i| ![40, 41, 42, BLOCK + 5].contains(i)) {
+            assert!(
+                o.pdf[i] >= 0.0 && o.pdf[i] != -7.0,
+                "lane {i}: {}",
+                o.pdf[i]
+            );
+            assert!(o.s_flags[i] != 99, "lane {i}");
+        }
+    }
+}
