@@ -24,9 +24,7 @@ use crate::simd::kernels::{
     AlbedoJob, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob, SampleJob,
 };
 use rayon::prelude::*;
-use stage::{
-    Randoms, Scratch, grow_f32, grow_u8, padded, rows3, stage_directions, view3, with_scratch,
-};
+use stage::{Randoms, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch};
 
 /// Lanes per work item: a group's staged arrays stay in the L2 cache.
 pub const BLOCK: usize = 4096;
@@ -339,7 +337,7 @@ impl<'g> Scatter<'g> {
     }
 
     /// `out[lane] = staged[j]` for the group's `j`-th lane; failed lanes get 0.
-    fn row(&self, staged: &[f32], out: &mut [f32]) {
+    fn row<T: Copy + Default>(&self, staged: &[T], out: &mut [T]) {
         let n = self.lanes.len();
         match self.contiguous {
             Some(first) => out[first..first + n].copy_from_slice(&staged[..n]),
@@ -352,7 +350,7 @@ impl<'g> Scatter<'g> {
         if let Some(failed) = self.failed {
             for (j, &lane) in self.lanes.iter().enumerate() {
                 if failed[j] != 0 {
-                    out[lane as usize - self.start] = 0.0;
+                    out[lane as usize - self.start] = T::default();
                 }
             }
         }
@@ -361,6 +359,18 @@ impl<'g> Scatter<'g> {
     fn rows(&self, staged: &[Vec<f32>; 3], out: [&mut [f32]; 3]) {
         for (row, out) in staged.iter().zip(out) {
             self.row(row, out);
+        }
+    }
+
+    /// `out[lane] = value` for every lane of the group.
+    fn fill<T: Copy>(&self, value: T, out: &mut [T]) {
+        match self.contiguous {
+            Some(first) => out[first..first + self.lanes.len()].fill(value),
+            None => {
+                for &lane in self.lanes {
+                    out[lane as usize - self.start] = value;
+                }
+            }
         }
     }
 }
@@ -557,15 +567,11 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             u: view3(&s.u, len),
             lobe: lanes,
             wi: rows3(&mut s.wi, len),
-            value: [
-                grow_f32(sv_r, len),
-                grow_f32(sv_g, len),
-                grow_f32(sv_b, len),
-            ],
-            pdf: grow_f32(&mut s.sample_pdf, len),
-            eta: grow_f32(&mut s.eta, len),
-            roughness: grow_f32(&mut s.roughness, len),
-            events: grow_u8(&mut s.events, len),
+            value: [grow(sv_r, len), grow(sv_g, len), grow(sv_b, len)],
+            pdf: grow(&mut s.sample_pdf, len),
+            eta: grow(&mut s.eta, len),
+            roughness: grow(&mut s.roughness, len),
+            events: grow(&mut s.events, len),
         };
         lobe.sample_lanes(kernels, &mut job);
         let mixture = closure.lobes().len() > 1;
@@ -585,54 +591,80 @@ fn sample_block<'a, C: ClosureSource<'a>>(
                 l.lobe.eval_lanes(kernels, &mut job);
             }
         }
+        // Final value, pdf, weight and flags, staged in place (the random-number rows
+        // hold the weight), then written back row by row.
         let lobe_flags = lobe.flags();
-        for (j, &lane) in group.lanes.iter().enumerate() {
+        let n = group.lanes.len();
+        let [wr, wg, wb] = rows3(&mut s.u, len);
+        let sample_flags = grow(&mut s.flags, len);
+        let [vr, vg, vb] = &mut s.value;
+        let [xr, xg, xb] = &mut s.wi;
+        if !mixture {
+            for (v, sv) in [&mut *vr, &mut *vg, &mut *vb]
+                .into_iter()
+                .zip(&s.sample_value)
+            {
+                v[..n].copy_from_slice(&sv[..n]);
+            }
+            s.pdf[..n].copy_from_slice(&s.sample_pdf[..n]);
+        }
+        for j in 0..n {
             let events = s.events[j];
-            let c = input
-                .closures
-                .closure(lane as usize)
-                .expect("resolved before");
-            let sampled = Rgb::new(
-                s.sample_value[0][j],
-                s.sample_value[1][j],
-                s.sample_value[2][j],
-            );
-            let (value, pdf) = if events & EVENT_DELTA != 0 {
-                (sampled, c.lobes()[k].probability * s.sample_pdf[j])
-            } else if mixture {
-                (
-                    Rgb::new(s.value[0][j], s.value[1][j], s.value[2][j]),
-                    s.pdf[j],
-                )
-            } else {
-                (sampled, s.sample_pdf[j])
-            };
+            let delta = events & EVENT_DELTA != 0;
+            if delta && mixture {
+                let lane = group.lanes[j] as usize;
+                let c = input.closures.closure(lane).expect("resolved before");
+                vr[j] = s.sample_value[0][j];
+                vg[j] = s.sample_value[1][j];
+                vb[j] = s.sample_value[2][j];
+                s.pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
+            }
+            let pdf = s.pdf[j];
             let ok = s.failed[j] == 0 && events & EVENT_VALID != 0 && pdf > 0.0 && pdf.is_finite();
-            let result = if ok {
+            if ok {
+                (wr[j], wg[j], wb[j]) = (vr[j] / pdf, vg[j] / pdf, vb[j] / pdf);
                 let side = if events & EVENT_TRANSMITTED != 0 {
                     flags::TRANSMISSION
                 } else {
                     flags::REFLECTION
                 };
-                let class = if events & EVENT_DELTA != 0 {
+                let class = if delta {
                     flags::SPECULAR
                 } else {
                     lobe_flags & (flags::DIFFUSE | flags::GLOSSY)
                 };
-                SampleResult {
-                    wi: Vec3::new(s.wi[0][j], s.wi[1][j], s.wi[2][j]),
-                    value,
-                    pdf,
-                    weight: value.map(|v| v / pdf),
-                    flags: side | class,
-                    lobe: k as u32,
-                    eta: s.eta[j],
-                    roughness: s.roughness[j],
-                }
+                sample_flags[j] = side | class;
             } else {
-                FAILED
-            };
-            out.write(lane as usize - start, &result);
+                (wr[j], wg[j], wb[j]) = (0.0, 0.0, 0.0);
+                (vr[j], vg[j], vb[j]) = (0.0, 0.0, 0.0);
+                (xr[j], xg[j], xb[j]) = (0.0, 0.0, 0.0);
+                s.pdf[j] = 0.0;
+                sample_flags[j] = 0;
+                s.eta[j] = 1.0;
+                s.roughness[j] = 0.0;
+            }
+        }
+        let scatter = Scatter::new(&group.lanes, start, &s.failed, false);
+        scatter.rows(&s.wi, [&mut *out.wi.x, &mut *out.wi.y, &mut *out.wi.z]);
+        scatter.row(&s.pdf, out.pdf);
+        scatter.rows(
+            &s.u,
+            [&mut *out.weight.x, &mut *out.weight.y, &mut *out.weight.z],
+        );
+        if let Some(v) = out.value.as_mut() {
+            scatter.rows(&s.value, [&mut *v.x, &mut *v.y, &mut *v.z]);
+        }
+        if let Some(f) = out.flags.as_deref_mut() {
+            scatter.row(sample_flags, f);
+        }
+        if let Some(l) = out.lobe.as_deref_mut() {
+            scatter.fill(k as u32, l);
+        }
+        if let Some(e) = out.eta.as_deref_mut() {
+            scatter.row(&s.eta, e);
+        }
+        if let Some(r) = out.roughness.as_deref_mut() {
+            scatter.row(&s.roughness, r);
         }
     }
     finish_block(s, start, |lane| out.write(lane, &FAILED))

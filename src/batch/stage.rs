@@ -3,7 +3,7 @@
 //! [`Scratch`] that only grows, so steady-state batch calls do not allocate.
 
 use super::{BatchInput, ClosureSource, Soa3};
-use crate::closure::{Closure, check_randoms};
+use crate::closure::{Closure, ONE_MINUS_EPSILON, check_randoms};
 use crate::error::Error;
 use crate::math::Vec3;
 use crate::simd::Kernels;
@@ -16,6 +16,8 @@ use std::ops::Range;
 pub(super) struct Group {
     /// A lane whose closure represents the shape.
     pub rep: usize,
+    /// That closure's address, to tell whether all lanes share it.
+    closure: usize,
     /// Whether every lane has the representative's closure.
     pub uniform: bool,
     /// The chosen lobe (sampling only).
@@ -97,16 +99,34 @@ impl Groups {
             }
             return;
         }
+        if let Some(r) = randoms
+            && input.active.is_none()
+            && input.closures.is_shared()
+            && self.single_lobe_fast_path(input, range.clone(), r)
+        {
+            return;
+        }
+        // A shared closure is resolved and checked once.
+        let shared = input.closures.is_shared().then(|| {
+            input.closures.closure(start).and_then(|c| {
+                c.check_finished()?;
+                Ok(c)
+            })
+        });
         // The previous lane's closure and group: consecutive lanes usually match.
         let mut previous: Option<(*const Closure, usize, usize)> = None;
         for lane in range {
             if !input.is_active(lane) {
                 continue;
             }
-            let closure = match input.closures.closure(lane).and_then(|c| {
-                c.check_finished()?;
-                Ok(c)
-            }) {
+            let resolved = match &shared {
+                Some(c) => c.clone(),
+                None => input.closures.closure(lane).and_then(|c| {
+                    c.check_finished()?;
+                    Ok(c)
+                }),
+            };
+            let closure = match resolved {
                 Ok(c) => c,
                 Err(e) => {
                     self.failed.push(lane as u32);
@@ -143,12 +163,37 @@ impl Groups {
             };
             let group = &mut self.list[g];
             group.lanes.push(lane as u32);
-            group.uniform &= std::ptr::eq(
-                input.closures.closure(group.rep).expect("resolved before"),
-                closure,
-            ) || input.closures.is_shared();
+            group.uniform &= group.closure == ptr as usize;
             previous = Some((ptr, lobe, g));
         }
+    }
+
+    /// Sampling a shared one-lobe closure with finite random numbers: every lane
+    /// takes lobe 0 (as `Closure::choose_lobe` would), without per-lane work.
+    fn single_lobe_fast_path<'a, C: ClosureSource<'a>>(
+        &mut self,
+        input: &BatchInput<'a, C>,
+        range: Range<usize>,
+        r: Randoms<'_>,
+    ) -> bool {
+        let start = range.start;
+        let one_lobe = input.closures.closure(start).is_ok_and(|c| {
+            c.is_finished() && c.lobes().len() == 1 && c.lobes()[0].probability == 1.0
+        });
+        let finite = r.u.iter().all(|u| {
+            u[range.clone()]
+                .iter()
+                .fold(true, |ok, x| ok & x.is_finite())
+        });
+        if !(one_lobe && finite) {
+            return false;
+        }
+        for (reused, &u) in self.u_reused.iter_mut().zip(&r.u[0][range.clone()]) {
+            *reused = u.clamp(0.0, ONE_MINUS_EPSILON);
+        }
+        let g = self.find_or_add(input, start, 0);
+        self.list[g].lanes.extend(range.map(|l| l as u32));
+        true
     }
 
     /// The group of `lane`'s closure shape and `lobe`, created if new.
@@ -167,6 +212,7 @@ impl Groups {
             if self.used == self.list.len() {
                 self.list.push(Group {
                     rep: 0,
+                    closure: 0,
                     uniform: true,
                     lobe: 0,
                     lanes: Vec::new(),
@@ -174,6 +220,7 @@ impl Groups {
             }
             let g = &mut self.list[self.used];
             g.rep = lane;
+            g.closure = closure as *const Closure as usize;
             g.uniform = true;
             g.lobe = lobe;
             g.lanes.clear();
@@ -184,19 +231,11 @@ impl Groups {
 }
 
 /// Grow `v` to at least `len` values (never shrinks, never zeroes).
-fn grow<T: Copy + Default>(v: &mut Vec<T>, len: usize) -> &mut [T] {
+pub(super) fn grow<T: Copy + Default>(v: &mut Vec<T>, len: usize) -> &mut [T] {
     if v.len() < len {
         v.resize(len, T::default());
     }
     &mut v[..len]
-}
-
-pub(super) fn grow_f32(v: &mut Vec<f32>, len: usize) -> &mut [f32] {
-    grow(v, len)
-}
-
-pub(super) fn grow_u8(v: &mut Vec<u8>, len: usize) -> &mut [u8] {
-    grow(v, len)
 }
 
 /// `len` values of each of three rows.
@@ -354,6 +393,7 @@ pub(super) struct Scratch {
     pub eta: Vec<f32>,
     pub roughness: Vec<f32>,
     pub events: Vec<u8>,
+    pub flags: Vec<u32>,
 }
 
 impl Scratch {

@@ -218,7 +218,7 @@ pub fn sin_cos<L: Lane>(x: L) -> (L, L) {
     let r = q.mul_add(L::splat(-PIO2_1), x);
     let r = q.mul_add(L::splat(-PIO2_2), r);
     let r = q.mul_add(L::splat(-PIO2_3), r);
-    let r = r.clamp(L::splat(-0.8), L::splat(0.8));
+    let r = r.clamp(L::splat(-1.0), L::splat(1.0));
     let z = r * r;
     let s = (r * z).mul_add(
         horner(
