@@ -7,7 +7,21 @@
 #define N 64
 #define SENTINEL (-7.0f)
 #define USENTINEL 0xdeadbeefu
-#define TOL 1e-6f
+/* The documented batch-vs-scalar tolerances (glint::verify::BATCH_TOLERANCE and
+ * BATCH_SAMPLE_TOLERANCE): relative, absolute below 1e-2; the SIMD kernels fuse
+ * multiply-adds and use vectorized elementary functions. */
+#define TOL 1e-4f
+#define SAMPLE_TOL 2e-3f
+
+#define assert_batch_close(a, b, tol)                                                    \
+    do {                                                                                 \
+        float ba_ = (float)(a), bb_ = (float)(b);                                        \
+        float bt_ = (tol) * fmaxf(fmaxf(fabsf(ba_), fabsf(bb_)), 1e-2f);                 \
+        if (!(fabsf(ba_ - bb_) <= bt_))                                                  \
+            print_error("%s = %.9g, %s = %.9g (tolerance %g)\n", #a, (double)ba_, #b,    \
+                        (double)bb_, (double)bt_);                                       \
+        assert_true(fabsf(ba_ - bb_) <= bt_);                                            \
+    } while (0)
 
 /* Inputs shared by the tests, rebuilt by batch_setup. */
 typedef struct batch_fixture {
@@ -158,12 +172,12 @@ static void check_eval_lanes(const batch_fixture *bf, const glint_eval_batch_arg
         computed++;
         assert_ok(glint_eval(lane_closure(a->closure, a->closures, i), lane_wo(bf, i),
                              lane_wi(bf, i), &r));
-        assert_close(o->r[i], r.value[0], TOL);
-        assert_close(o->g[i], r.value[1], TOL);
-        assert_close(o->b[i], r.value[2], TOL);
-        assert_close(o->pdf[i], r.pdf, TOL);
+        assert_batch_close(o->r[i], r.value[0], TOL);
+        assert_batch_close(o->g[i], r.value[1], TOL);
+        assert_batch_close(o->b[i], r.value[2], TOL);
+        assert_batch_close(o->pdf[i], r.pdf, TOL);
         if (a->pdf_reverse != NULL)
-            assert_close(o->pdf_reverse[i], r.pdf_reverse, TOL);
+            assert_batch_close(o->pdf_reverse[i], r.pdf_reverse, TOL);
         else
             assert_true(o->pdf_reverse[i] == SENTINEL);
         nonzero += r.value[0] > 0.0f;
@@ -222,7 +236,7 @@ static void pdf_batch_matches_scalar(void **state)
             }
             assert_ok(glint_pdf(lane_closure(a.closure, a.closures, i), lane_wo(bf, i),
                                 lane_wi(bf, i), &p));
-            assert_close(pdf[i], p, TOL);
+            assert_batch_close(pdf[i], p, TOL);
         }
     }
 }
@@ -272,17 +286,17 @@ static void check_sample_lane_untouched(const sample_out *o, int i)
 static void check_sample_lane(const glint_sample_batch_args *a, const sample_out *o, int i,
                               const glint_sample_result *s)
 {
-    assert_close(o->wi_x[i], s->wi.x, TOL);
-    assert_close(o->wi_y[i], s->wi.y, TOL);
-    assert_close(o->wi_z[i], s->wi.z, TOL);
-    assert_close(o->pdf[i], s->pdf, TOL);
-    assert_close(o->w_r[i], s->weight[0], TOL);
-    assert_close(o->w_g[i], s->weight[1], TOL);
-    assert_close(o->w_b[i], s->weight[2], TOL);
+    assert_batch_close(o->wi_x[i], s->wi.x, SAMPLE_TOL);
+    assert_batch_close(o->wi_y[i], s->wi.y, SAMPLE_TOL);
+    assert_batch_close(o->wi_z[i], s->wi.z, SAMPLE_TOL);
+    assert_batch_close(o->pdf[i], s->pdf, SAMPLE_TOL);
+    assert_batch_close(o->w_r[i], s->weight[0], SAMPLE_TOL);
+    assert_batch_close(o->w_g[i], s->weight[1], SAMPLE_TOL);
+    assert_batch_close(o->w_b[i], s->weight[2], SAMPLE_TOL);
     if (a->value_r != NULL) {
-        assert_close(o->v_r[i], s->value[0], TOL);
-        assert_close(o->v_g[i], s->value[1], TOL);
-        assert_close(o->v_b[i], s->value[2], TOL);
+        assert_batch_close(o->v_r[i], s->value[0], SAMPLE_TOL);
+        assert_batch_close(o->v_g[i], s->value[1], SAMPLE_TOL);
+        assert_batch_close(o->v_b[i], s->value[2], SAMPLE_TOL);
     } else {
         assert_true(o->v_r[i] == SENTINEL && o->v_g[i] == SENTINEL && o->v_b[i] == SENTINEL);
     }
@@ -295,11 +309,11 @@ static void check_sample_lane(const glint_sample_batch_args *a, const sample_out
     else
         assert_int_equal(o->lobe[i], USENTINEL);
     if (a->eta != NULL)
-        assert_close(o->eta[i], s->eta, TOL);
+        assert_batch_close(o->eta[i], s->eta, SAMPLE_TOL);
     else
         assert_true(o->eta[i] == SENTINEL);
     if (a->roughness != NULL)
-        assert_close(o->roughness[i], s->roughness, TOL);
+        assert_batch_close(o->roughness[i], s->roughness, SAMPLE_TOL);
     else
         assert_true(o->roughness[i] == SENTINEL);
 }
@@ -392,9 +406,9 @@ static void bad_lanes_are_reported_and_others_computed(void **state)
                 continue;
             }
             assert_ok(glint_eval(bf->per_lane[i], lane_wo(bf, i), lane_wi(bf, i), &r));
-            assert_close(o.r[i], r.value[0], TOL);
-            assert_close(o.pdf[i], r.pdf, TOL);
-            assert_close(o.pdf_reverse[i], r.pdf_reverse, TOL);
+            assert_batch_close(o.r[i], r.value[0], TOL);
+            assert_batch_close(o.pdf[i], r.pdf, TOL);
+            assert_batch_close(o.pdf_reverse[i], r.pdf_reverse, TOL);
         }
     }
     {
@@ -416,7 +430,7 @@ static void bad_lanes_are_reported_and_others_computed(void **state)
                 continue;
             }
             assert_ok(glint_pdf(bf->mix, lane_wo(bf, i), lane_wi(bf, i), &p));
-            assert_close(pdf[i], p, TOL);
+            assert_batch_close(pdf[i], p, TOL);
         }
     }
     {
@@ -479,7 +493,7 @@ static void bad_per_lane_closures(void **state)
                 continue;
             }
             assert_ok(glint_eval(lanes[i], lane_wo(bf, i), lane_wi(bf, i), &r));
-            assert_close(o.r[i], r.value[0], TOL);
+            assert_batch_close(o.r[i], r.value[0], TOL);
         }
         lanes[10] = bf->per_lane[10];
         a = eval_args(bf, &o);
@@ -633,6 +647,121 @@ static void sample_batch_argument_errors(void **state)
     free(o);
 }
 
+/* ---- albedo ------------------------------------------------------------------------------ */
+
+static glint_albedo_batch_args albedo_args(const batch_fixture *bf, float *r, float *g, float *b)
+{
+    glint_albedo_batch_args a;
+    memset(&a, 0, sizeof a);
+    a.struct_size = sizeof a;
+    a.count = N;
+    a.closure = bf->mix;
+    a.wo_x = bf->wo_x, a.wo_y = bf->wo_y, a.wo_z = bf->wo_z;
+    a.albedo_r = r, a.albedo_g = g, a.albedo_b = b;
+    fill(r, SENTINEL), fill(g, SENTINEL), fill(b, SENTINEL);
+    return a;
+}
+
+static void albedo_batch_matches_scalar(void **state)
+{
+    batch_fixture *bf = *state;
+    float r[N], g[N], b[N];
+    int variant, i;
+    for (variant = 0; variant < 4; variant++) {
+        glint_albedo_batch_args a = albedo_args(bf, r, g, b);
+        if (variant & 1)
+            a.active = bf->active;
+        if (variant & 2)
+            a.closures = bf->per_lane;
+        assert_ok(glint_albedo_batch(&a));
+        for (i = 0; i < N; i++) {
+            float expected[3];
+            if (!lane_active(a.active, i)) {
+                assert_true(r[i] == SENTINEL && g[i] == SENTINEL && b[i] == SENTINEL);
+                continue;
+            }
+            assert_ok(glint_albedo(lane_closure(a.closure, a.closures, i), lane_wo(bf, i),
+                                   expected));
+            assert_batch_close(r[i], expected[0], TOL);
+            assert_batch_close(g[i], expected[1], TOL);
+            assert_batch_close(b[i], expected[2], TOL);
+        }
+    }
+}
+
+static void albedo_batch_argument_errors(void **state)
+{
+    batch_fixture *bf = *state;
+    fixture *fx = &bf->base;
+    float r[N], g[N], b[N];
+    glint_albedo_batch_args a;
+    int k;
+    check_error(fx, glint_albedo_batch(NULL), GLINT_ERROR_NULL_POINTER);
+    a = albedo_args(bf, r, g, b);
+    a.struct_size = sizeof a - 1;
+    check_error(fx, glint_albedo_batch(&a), GLINT_ERROR_STRUCT_SIZE);
+    a = albedo_args(bf, r, g, b);
+    a.closure = NULL;
+    check_error(fx, glint_albedo_batch(&a), GLINT_ERROR_NULL_POINTER);
+    for (k = 0; k < 6; k++) {
+        a = albedo_args(bf, r, g, b);
+        switch (k) {
+        case 0: a.wo_x = NULL; break;
+        case 1: a.wo_y = NULL; break;
+        case 2: a.wo_z = NULL; break;
+        case 3: a.albedo_r = NULL; break;
+        case 4: a.albedo_g = NULL; break;
+        default: a.albedo_b = NULL; break;
+        }
+        check_error(fx, glint_albedo_batch(&a), GLINT_ERROR_NULL_POINTER);
+    }
+    assert_true(r[0] == SENTINEL);
+    a = albedo_args(bf, r, g, b);
+    bf->wo_z[3] = NAN;
+    check_error(fx, glint_albedo_batch(&a), GLINT_ERROR_INVALID_ARGUMENT);
+    assert_error_mentions("lane 3");
+    assert_true(r[3] == 0.0f && r[0] != SENTINEL);
+}
+
+/* ---- every kernel set ---------------------------------------------------------------- */
+
+/* Batches on a runtime forced to each ISA this CPU has match the scalar calls. */
+static void every_isa_matches_scalar(void **state)
+{
+    static const char *const isas[] = {"scalar", "avx2", "avx512"};
+    batch_fixture *bf = *state;
+    size_t k;
+    int tested = 0;
+    for (k = 0; k < sizeof isas / sizeof isas[0]; k++) {
+        char config[32];
+        fixture fx;
+        glint_closure *c;
+        eval_out o;
+        glint_eval_batch_args a;
+        int i;
+        snprintf(config, sizeof config, "isa=%s threads=1", isas[k]);
+        memset(&fx, 0, sizeof fx);
+        if (glint_runtime_create(config, &fx.rt) != GLINT_OK)
+            continue; /* not on this CPU (every_isa_is_available_or_refused checks why) */
+        assert_ok(glint_arena_create(4, &fx.arena));
+        c = all_types_closure(&fx, NULL);
+        a = eval_args(bf, &o);
+        a.closure = c;
+        assert_ok(glint_eval_batch(&a));
+        for (i = 0; i < N; i++) {
+            glint_eval_result r = eval_result_init();
+            assert_ok(glint_eval(c, lane_wo(bf, i), lane_wi(bf, i), &r));
+            assert_batch_close(o.r[i], r.value[0], TOL);
+            assert_batch_close(o.pdf[i], r.pdf, TOL);
+            assert_batch_close(o.pdf_reverse[i], r.pdf_reverse, TOL);
+        }
+        glint_arena_destroy(fx.arena);
+        glint_runtime_destroy(fx.rt);
+        tested++;
+    }
+    assert_true(tested >= 1);
+}
+
 int main(void)
 {
 #define T(f) cmocka_unit_test_setup_teardown(f, batch_setup, batch_teardown)
@@ -645,6 +774,9 @@ int main(void)
         T(eval_batch_argument_errors),
         T(pdf_batch_argument_errors),
         T(sample_batch_argument_errors),
+        T(albedo_batch_matches_scalar),
+        T(albedo_batch_argument_errors),
+        T(every_isa_matches_scalar),
     };
 #undef T
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -32,8 +32,15 @@ static void every_status_has_a_string(void **state)
 
 static void runtime_create_accepts_valid_configs(void **state)
 {
-    static const char *const configs[] = {"", "isa=auto", "isa=scalar", " isa=scalar ; ",
-                                          "isa=auto,isa=scalar", "isa=auto\tisa=auto"};
+    static const char *const configs[] = {"",
+                                          "isa=auto",
+                                          "isa=scalar",
+                                          " isa=scalar ; ",
+                                          "isa=auto,isa=scalar",
+                                          "isa=auto\tisa=auto",
+                                          "threads=0",
+                                          "threads=1",
+                                          "isa=scalar threads=2"};
     size_t i;
     (void)state;
     for (i = 0; i < sizeof configs / sizeof configs[0]; i++) {
@@ -50,6 +57,36 @@ static void runtime_create_accepts_valid_configs(void **state)
         glint_runtime_destroy(rt);
     }
     glint_runtime_destroy(NULL); /* ignored */
+}
+
+/* Every ISA either runs (and is the one reported) or is refused as unsupported. */
+static void every_isa_is_available_or_refused(void **state)
+{
+    static const char *const isas[] = {"scalar", "avx2", "avx512"};
+    fixture *fx = *state;
+    const char *isa = NULL;
+    size_t i;
+    assert_ok(glint_runtime_isa(fx->rt, &isa));
+    assert_non_null(isa);
+    for (i = 0; i < sizeof isas / sizeof isas[0]; i++) {
+        char config[32];
+        glint_runtime *rt = NULL;
+        glint_status st;
+        snprintf(config, sizeof config, "isa=%s", isas[i]);
+        st = glint_runtime_create(config, &rt);
+        if (st == GLINT_OK) {
+            assert_ok(glint_runtime_isa(rt, &isa));
+            assert_string_equal(isa, isas[i]);
+            glint_runtime_destroy(rt);
+        } else {
+            check_error(fx, st, GLINT_ERROR_UNSUPPORTED);
+            assert_null(rt);
+            assert_error_mentions(isas[i]);
+            assert_error_mentions("scalar"); /* names what is supported */
+        }
+    }
+    check_error(fx, glint_runtime_isa(NULL, &isa), GLINT_ERROR_NULL_POINTER);
+    check_error(fx, glint_runtime_isa(fx->rt, NULL), GLINT_ERROR_NULL_POINTER);
 }
 
 static void runtime_create_errors(void **state)
@@ -70,7 +107,9 @@ static void runtime_create_errors(void **state)
     check_error(fx, glint_runtime_create("isa=quantum", &rt), GLINT_ERROR_OUT_OF_RANGE);
     assert_error_mentions("quantum");
     assert_error_mentions("scalar");
-    check_error(fx, glint_runtime_create("isa=avx512", &rt), GLINT_ERROR_UNSUPPORTED);
+    check_error(fx, glint_runtime_create("threads=-1", &rt), GLINT_ERROR_OUT_OF_RANGE);
+    assert_error_mentions("threads");
+    check_error(fx, glint_runtime_create("threads=many", &rt), GLINT_ERROR_OUT_OF_RANGE);
     check_error(fx, glint_runtime_create("\xff\xfe=1", &rt), GLINT_ERROR_INVALID_ARGUMENT);
     check_error(fx, glint_runtime_create(NULL, NULL), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_runtime_create("isa=auto", NULL), GLINT_ERROR_NULL_POINTER);
@@ -340,6 +379,8 @@ int main(void)
         cmocka_unit_test(every_status_has_a_string),
         cmocka_unit_test(runtime_create_accepts_valid_configs),
         cmocka_unit_test_setup_teardown(runtime_create_errors, fixture_setup, fixture_teardown),
+        cmocka_unit_test_setup_teardown(every_isa_is_available_or_refused, fixture_setup,
+                                        fixture_teardown),
         cmocka_unit_test_setup_teardown(lobe_types_enumerate_and_find, fixture_setup,
                                         fixture_teardown),
         cmocka_unit_test_setup_teardown(lobe_type_query_errors, fixture_setup, fixture_teardown),

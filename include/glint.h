@@ -560,7 +560,9 @@ const char *glint_last_error(void);
 
 /*
  Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
- commas or semicolons; valid keys: `isa` (`auto` | `scalar`).
+ commas or semicolons; valid keys: `isa` (`auto` | `scalar` | `avx2` | `avx512`;
+ an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`) and `threads` (0 = one per
+ core, the default; 1 = batch calls stay on the calling thread; N = a pool of N).
 
  # Safety
  `config` is NULL or a NUL-terminated string; `out` is valid for writes.
@@ -575,6 +577,15 @@ glint_status glint_runtime_create(const char *config, struct glint_runtime **out
  `runtime` is NULL or a handle from `glint_runtime_create` not yet destroyed.
  */
 void glint_runtime_destroy(struct glint_runtime *runtime);
+
+/*
+ The kernel set batch calls on this runtime's closures use: `"scalar"`, `"avx2"`
+ or `"avx512"` (static string; `isa=auto` resolves to the widest the CPU has).
+
+ # Safety
+ `runtime` is NULL or valid; `out` is NULL or writable.
+ */
+glint_status glint_runtime_isa(const struct glint_runtime *runtime, const char **out);
 
 /*
  Number of registered lobe types; their ids are `0 .. count - 1`.

@@ -15,7 +15,7 @@
 
 mod stage;
 
-use crate::closure::{Closure, SampleResult};
+use crate::closure::{Closure, SampleResult, clamp_randoms};
 use crate::error::Error;
 use crate::lobes::flags;
 use crate::math::{Rgb, Vec3};
@@ -361,18 +361,6 @@ impl<'g> Scatter<'g> {
             self.row(row, out);
         }
     }
-
-    /// `out[lane] = value` for every lane of the group.
-    fn fill<T: Copy>(&self, value: T, out: &mut [T]) {
-        match self.contiguous {
-            Some(first) => out[first..first + self.lanes.len()].fill(value),
-            None => {
-                for &lane in self.lanes {
-                    out[lane as usize - self.start] = value;
-                }
-            }
-        }
-    }
 }
 
 /// Zero-output the lanes that failed before grouping; the block's first error.
@@ -551,9 +539,8 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         let [uc, u0, u1] = rows3(&mut s.u, len);
         for (j, &lane) in group.lanes.iter().enumerate() {
             let lane = lane as usize;
-            uc[j] = s.groups.u_reused[lane - start];
-            u0[j] = u.u0[lane];
-            u1[j] = u.u1[lane];
+            let [_, a, b] = clamp_randoms([0.0, u.u0[lane], u.u1[lane]]);
+            (uc[j], u0[j], u1[j]) = (s.groups.u_reused[lane - start], a, b);
         }
         for row in [uc, u0, u1] {
             row[group.lanes.len()..].fill(0.5);
@@ -597,6 +584,7 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         let n = group.lanes.len();
         let [wr, wg, wb] = rows3(&mut s.u, len);
         let sample_flags = grow(&mut s.flags, len);
+        let lobe_index = grow(&mut s.lobe_index, len);
         let [vr, vg, vb] = &mut s.value;
         let [xr, xg, xb] = &mut s.wi;
         if !mixture {
@@ -634,12 +622,14 @@ fn sample_block<'a, C: ClosureSource<'a>>(
                     lobe_flags & (flags::DIFFUSE | flags::GLOSSY)
                 };
                 sample_flags[j] = side | class;
+                lobe_index[j] = k as u32;
             } else {
                 (wr[j], wg[j], wb[j]) = (0.0, 0.0, 0.0);
                 (vr[j], vg[j], vb[j]) = (0.0, 0.0, 0.0);
                 (xr[j], xg[j], xb[j]) = (0.0, 0.0, 0.0);
                 s.pdf[j] = 0.0;
                 sample_flags[j] = 0;
+                lobe_index[j] = 0;
                 s.eta[j] = 1.0;
                 s.roughness[j] = 0.0;
             }
@@ -658,7 +648,7 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             scatter.row(sample_flags, f);
         }
         if let Some(l) = out.lobe.as_deref_mut() {
-            scatter.fill(k as u32, l);
+            scatter.row(lobe_index, l);
         }
         if let Some(e) = out.eta.as_deref_mut() {
             scatter.row(&s.eta, e);

@@ -394,6 +394,7 @@ pub(super) struct Scratch {
     pub roughness: Vec<f32>,
     pub events: Vec<u8>,
     pub flags: Vec<u32>,
+    pub lobe_index: Vec<u32>,
 }
 
 impl Scratch {

@@ -317,7 +317,8 @@ impl Closure {
         check_randoms(u)?;
         let (chosen, u_reused) = self.choose_lobe(u[0]).ok_or_else(no_sample)?;
         let probability = self.lobes[chosen].probability;
-        self.sample_from(chosen, wo, [u_reused, u[1], u[2]], Some(probability))
+        let [_, u0, u1] = clamp_randoms(u);
+        self.sample_from(chosen, wo, [u_reused, u0, u1], Some(probability))
     }
 
     /// The lobe `u_lobe` selects and `u_lobe` rescaled to [0, 1) within its bin, or
@@ -354,7 +355,7 @@ impl Closure {
     ) -> Result<SampleResult, Error> {
         self.check_lobe(index)?;
         check_randoms(u)?;
-        self.sample_from(index, wo, u, None)
+        self.sample_from(index, wo, clamp_randoms(u), None)
     }
 
     /// Sample lobe `k`; with `mixture = Some(p_k)` the result describes the whole
@@ -376,11 +377,9 @@ impl Closure {
         let wi = l.frame.to_world(s.wi).normalize();
         let (value, pdf) = match mixture {
             Some(p) if s.delta => (l.weight * s.value, p * s.pdf),
-            // One lobe: the mixture is the lobe itself (probability 1).
-            Some(_) if self.lobe_count == 1 => (l.weight * s.value, s.pdf),
-            Some(_) => self.mixture(wo, wi),
-            None if s.delta => (l.weight * s.value, s.pdf),
-            None => self.eval_one(k, wo, wi),
+            // The lobe alone, or the whole closure when it is the only lobe.
+            Some(_) if self.lobe_count > 1 => self.mixture(wo, wi),
+            _ => (l.weight * s.value, s.pdf),
         };
         if !(pdf > 0.0 && pdf.is_finite()) {
             return Err(no_sample());
@@ -430,6 +429,11 @@ impl Closure {
 
 /// The largest `f32` below 1, so that `u < 1` for every sample dimension.
 pub(crate) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Random numbers clamped into [0, 1), as every sampling routine expects.
+pub(crate) fn clamp_randoms(u: [f32; 3]) -> [f32; 3] {
+    u.map(|x| x.clamp(0.0, ONE_MINUS_EPSILON))
+}
 
 /// Random numbers must be finite (they are clamped into [0, 1)).
 pub(crate) fn check_randoms(u: [f32; 3]) -> Result<(), Error> {

@@ -3,6 +3,7 @@
 use super::*;
 use crate::params::{self, ParamKind};
 use crate::runtime::Runtime;
+use crate::simd::Isa;
 
 /// C strings of one lobe type, made once so the registry can hand out pointers.
 struct LobeStrings {
@@ -126,7 +127,9 @@ pub extern "C" fn glint_last_error() -> *const c_char {
 }
 
 /// Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
-/// commas or semicolons; valid keys: `isa` (`auto` | `scalar`).
+/// commas or semicolons; valid keys: `isa` (`auto` | `scalar` | `avx2` | `avx512`;
+/// an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`) and `threads` (0 = one per
+/// core, the default; 1 = batch calls stay on the calling thread; N = a pool of N).
 ///
 /// # Safety
 /// `config` is NULL or a NUL-terminated string; `out` is valid for writes.
@@ -165,6 +168,29 @@ pub unsafe extern "C" fn glint_runtime_destroy(runtime: *mut glint_runtime) {
         }
         Ok(())
     });
+}
+
+/// The kernel set batch calls on this runtime's closures use: `"scalar"`, `"avx2"`
+/// or `"avx512"` (static string; `isa=auto` resolves to the widest the CPU has).
+///
+/// # Safety
+/// `runtime` is NULL or valid; `out` is NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_runtime_isa(
+    runtime: *const glint_runtime,
+    out: *mut *const c_char,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        let name = match rt.runtime.kernels().isa() {
+            Isa::Scalar => c"scalar",
+            Isa::Avx2 => c"avx2",
+            Isa::Avx512 => c"avx512",
+        };
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", name.as_ptr()) }
+    })
 }
 
 /// Number of registered lobe types; their ids are `0 .. count - 1`.

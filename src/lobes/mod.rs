@@ -82,6 +82,7 @@ impl<L: Lane> Sample<L> {
         let ok = self.valid
             & self.pdf.gt(L::zero())
             & self.pdf.is_finite()
+            & (self.wi.x + self.wi.y + self.wi.z).is_finite()
             & self.value.r.is_finite()
             & self.value.g.is_finite()
             & self.value.b.is_finite();

@@ -66,6 +66,7 @@ pub trait Lane:
     /// `ln(1 + self)`, accurate for small arguments.
     fn ln_1p(self) -> Self;
     fn sin_cos(self) -> (Self, Self);
+    /// `acos` of `self` clamped to [-1, 1] (round-off outside is not NaN).
     fn acos(self) -> Self;
     /// `atan2(self, x)`: the angle of the point `(x, self)`, in [-pi, pi].
     fn atan2(self, x: Self) -> Self;
@@ -226,7 +227,8 @@ impl Lane for f32 {
     }
     #[inline(always)]
     fn acos(self) -> Self {
-        f32::acos(self)
+        // Clamped as `vmath::acos` is: round-off just outside [-1, 1] is not NaN.
+        f32::acos(self.clamp(-1.0, 1.0))
     }
     #[inline(always)]
     fn atan2(self, x: Self) -> Self {

@@ -6,8 +6,10 @@ use super::lane::Lane;
 /// `1 / sqrt(pi)`.
 pub const INV_SQRT_PI: f32 = 0.564_189_6;
 
-/// Complementary error function for `x >= 0`, Numerical Recipes' `erfcc`
-/// (Chebyshev fit, fractional error < 1.2e-7 everywhere).
+/// Complementary error function for `x >= 0`, Numerical Recipes' `erfcc` (a
+/// Chebyshev fit good to 1.2e-7 in exact arithmetic). In f32 the rounding of `x^2`
+/// dominates: measured max relative error 7.8e-6 on [0, 9], near `x = 8`
+/// (`tests/vmath.rs`, every ISA).
 #[inline(always)]
 pub fn erfc_nonneg<L: Lane>(x: L) -> L {
     let t = L::one() / (L::one() + L::splat(0.5) * x);
@@ -30,14 +32,17 @@ pub fn erfc_nonneg<L: Lane>(x: L) -> L {
     t * (poly - x * x).exp()
 }
 
-/// The error function, odd extension of [`erfc_nonneg`]; absolute error < 1.2e-7.
+/// The error function, odd extension of [`erfc_nonneg`]: measured max absolute error
+/// 4.6e-7 on [-10, 10] (the cancellation in `1 - erfc`; `tests/vmath.rs`).
 #[inline(always)]
 pub fn erf<L: Lane>(x: L) -> L {
     (L::one() - erfc_nonneg(x.abs())).copysign(x)
 }
 
 /// Inverse error function on (-1, 1), Giles 2010 ("Approximating the erfinv
-/// function", single-precision branch-free form); relative error ~ 1e-6.
+/// function", single-precision branch-free form): measured max relative error 2.6e-7
+/// for `|x| <= 1 - 2^-23`. Inputs are clamped to `+-0.9999999`, so the one f32 closer
+/// to 1 (`1 - 2^-24`) is 2.3% off (`tests/vmath.rs`).
 #[inline(always)]
 pub fn erf_inv<L: Lane>(x: L) -> L {
     let x = x.clamp(L::splat(-0.999_999_9), L::splat(0.999_999_9));

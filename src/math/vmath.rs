@@ -10,11 +10,12 @@
 //! exactly-multipliable parts (Cody-Waite) are derived in the doc of each constant.
 //! Because this code must serve the SIMD lanes, it never calls `Lane::exp` & co.
 //!
-//! Each function's maximum error is measured over a dense sweep of its domain
-//! against f64 in `tests/vmath.rs`, both on `f32` (unfused `mul_add`) and on every
-//! SIMD ISA of the machine (fused); each doc states the larger of the two and the
-//! bound the test asserts. `mul_add` is fused or not depending on the lane, and both
-//! variants are exact where the reductions need it.
+//! Errors: each doc states the maximum error measured against f64 over a dense sweep
+//! of the domain by `tests/vmath.rs` (run with `GLINT_VMATH_DENSITY=16`, 1.8e7 to
+//! 5e7 points per function), the larger of the `f32` instantiation (unfused `mul_add`)
+//! and AVX2 (fused), and the bound that test asserts for every ISA. The argument
+//! reductions are exact whether or not `mul_add` is fused (`sin_cos`: for
+//! `|x| < 1.2e4`).
 
 use super::lane::Lane;
 
@@ -109,10 +110,11 @@ fn exp_split<L: Lane>(hi: L, lo: L) -> L {
 /// The exponential, Cephes `expf`: `x = n ln2 + r` (Cody-Waite, `|r| <= ln2/2`), a
 /// degree-6 polynomial for `exp(r)`, times `2^n`.
 ///
-/// Max relative error 1.3e-7 over [-87.33, 88.72] (normal results); subnormal results
-/// (x in [-103.97, -87.34]) are rounded once, absolute error <= 1 subnormal ulp
-/// (1.4e-45). Measured in tests/vmath.rs (tested bounds 2e-7 and 1.5e-45).
-/// `x > 88.73 -> +inf`, `x < -103.98 -> 0`, `exp(NaN) = NaN`.
+/// Measured max relative error 8.4e-8 over [-87.33, 88.72] (normal results; tested
+/// bound 1.5e-7); subnormal results (x in [-103.97, -87.34]) are not flushed (unless
+/// the host sets FTZ): max absolute error 1.05e-45, under one subnormal ulp (tested
+/// bound 1.5e-45).
+/// `x > 88.7228 -> +inf`, `x < -103.973 -> 0`, `exp(NaN) = NaN`.
 #[inline(always)]
 pub fn exp<L: Lane>(x: L) -> L {
     exp_split(x, L::zero())
@@ -176,21 +178,22 @@ fn ln_special<L: Lane>(x: L, r: L) -> L {
 /// `[sqrt(1/2), sqrt(2))`, `ln(1 + f) = f - f^2/2 + f^3 P(f)` (degree 8), plus `k ln2`
 /// (Cody-Waite). Subnormals are prescaled by `2^24`.
 ///
-/// Max relative error 1.2e-7 over all positive finite f32 (subnormals included).
-/// Measured in tests/vmath.rs (tested bound 2e-7). `ln(+-0) = -inf`, `ln(+inf) = +inf`,
-/// negative or NaN -> NaN.
+/// Measured max relative error 8.1e-8 over all positive finite f32, subnormals
+/// included (tested bound 1.5e-7). `ln(+-0) = -inf`, `ln(+inf) = +inf`, negative or
+/// NaN -> NaN.
 #[inline(always)]
 pub fn ln<L: Lane>(x: L) -> L {
     let (f, k) = ln_reduce(x, true);
     ln_special(x, ln_reduced(f, k))
 }
 
-/// `ln(1 + x)`: `u = 1 + x` rounded, `c = (1 + x) - u` exactly (Fast2Sum), then
-/// `ln(u) + c/u` with `ln(u)` as in [`ln`] (the FreeBSD `log1pf` correction). Tiny `x`
-/// gives `u = 1`, `c = x`: `ln_1p(1e-10) = 1e-10`.
+/// `ln(1 + x)` as in FreeBSD's `log1pf`: reduce `u = fl(1 + x)` as in [`ln`]; where
+/// `u` needs no scaling (`1 + x` in about `[sqrt(1/2), sqrt(2))`) evaluate Cephes'
+/// polynomial at `f = x` itself (exact, so `ln_1p(1e-10) = 1e-10`), elsewhere add the
+/// rounding correction `c/u`, `c = (1 + x) - u` exactly (Fast2Sum).
 ///
-/// Max relative error 1.3e-7 over (-1, f32::MAX]. Measured in tests/vmath.rs (tested
-/// bound 2e-7). `ln_1p(-1) = -inf`, `x < -1` or NaN -> NaN, `ln_1p(+inf) = +inf`.
+/// Measured max relative error 1.25e-7 over (-1, f32::MAX] (tested bound 2e-7).
+/// `ln_1p(-1) = -inf`, `x < -1` or NaN -> NaN, `ln_1p(+inf) = +inf`.
 #[inline(always)]
 pub fn ln_1p<L: Lane>(x: L) -> L {
     let u = L::one() + x;
@@ -209,9 +212,10 @@ pub fn ln_1p<L: Lane>(x: L) -> L {
 /// Cody-Waite `pi/2` (exact products for `|x| < 1.2e4`, fused or not), degree-7 odd
 /// and degree-8 even polynomials on `|r| <= pi/4`, quadrant `q mod 4` by selects.
 ///
-/// Max absolute error 1.1e-7 over [-1e4, 1e4] (each of sin and cos). Measured in
-/// tests/vmath.rs (tested bound 2e-7). Past `|x| ~ 1e5` the reduction loses accuracy
-/// progressively; `r` is clamped so results stay in [-1, 1]. `+-inf` or NaN -> NaN.
+/// Measured max absolute error 7.8e-8 over [-1e4, 1e4], each of sin and cos (tested
+/// bound 1.5e-7). Beyond, the reduction stays exact only where `mul_add` is fused
+/// (the SIMD lanes: still ~1.1e-7 up to `|x| = 1e6`), then degrades; `r` is clamped,
+/// so results stay in [-1, 1] for every finite `x`. `+-inf` or NaN -> NaN.
 #[inline(always)]
 pub fn sin_cos<L: Lane>(x: L) -> (L, L) {
     let q = (x * L::splat(std::f32::consts::FRAC_2_PI)).round();
@@ -254,8 +258,9 @@ pub fn sin_cos<L: Lane>(x: L) -> (L, L) {
 /// in `z`) for `s = a, z = a^2` when `a <= 1/2`, else `s = sqrt((1 - a)/2)`, `z = s^2`
 /// and `acos(a) = 2 asin(s)`; then `acos(x) = k pi/2 +- w` with `pi/2` in two parts.
 ///
-/// Max absolute error 1.6e-7 over [-1, 1]. Measured in tests/vmath.rs (tested bound
-/// 2.5e-7). `|x| > 1` is clamped to `+-1` (round-off never gives NaN); NaN -> NaN.
+/// Measured max absolute error 2.5e-7 over [-1, 1] (tested bound 3e-7), about one ulp
+/// of results near pi (libm's `acosf` measures 2.1e-7). `|x| > 1` is clamped to `+-1`
+/// (round-off never gives NaN); NaN -> NaN.
 #[inline(always)]
 pub fn acos<L: Lane>(x: L) -> L {
     let a = x.abs().min(L::one());
@@ -292,8 +297,8 @@ pub fn acos<L: Lane>(x: L) -> L {
 /// u + u z P(z)` (degree 3 in `z = u^2`); the octant gives `k pi/4 +- atan(u)`, summed
 /// with `pi/4` in two parts, and the sign of `y` is copied onto the result.
 ///
-/// Max absolute error 1.9e-7 over the plane (|x|, |y| up to 1e30 and subnormal; the
-/// error is that of the angle). Measured in tests/vmath.rs (tested bound 2.5e-7).
+/// Measured max absolute error 1.85e-7 over the plane, `|x|, |y|` from subnormal to
+/// 1e30 (tested bound 2.5e-7).
 /// `atan2(+-0, +-0) = +-0` (`x = -0` counts as `+0`), infinities give the limiting
 /// angles (`atan2(inf, inf) = pi/4`), NaN in either -> NaN.
 #[inline(always)]
@@ -334,15 +339,17 @@ pub fn atan2<L: Lane>(y: L, x: L) -> L {
     L::select(x.eq(x) & y.eq(y), r, L::splat(f32::NAN))
 }
 
-/// `x^e` for `x >= 0` as `exp(e ln x)` with `ln x` and `e ln x` carried in double-f32
-/// (the error of a plain f32 `e ln x` would be amplified by `|e ln x|`): `x = m 2^k`,
-/// `ln m = 2 atanh(s)`, `s = (m - 1)/(m + 1)` in two parts (exact residual by
-/// [`two_prod`]), `2 atanh(s) = 2s + s Q(s^2)` with the atanh Taylor series through
-/// `s^11` (|s| <= 0.172, truncation < 1e-10), `k ln2` in two parts, `e ln x` by
-/// `two_prod`, then [`exp`]'s body on the two-part exponent.
+/// `x^e` for `x >= 0` as `exp(e ln x)` with `ln x` and `e ln x` carried in double-f32,
+/// as SLEEF's `powf` does (a plain f32 `e ln x` has its error amplified by `|e ln x|`):
+/// `x = m 2^k`, `ln m = 2 atanh(s)` with `s = (m - 1)/(m + 1)` in two parts (the
+/// division residual by an error-free product: FMA, else Dekker's), `2 atanh(s) =
+/// 2s + s Q(s^2)` by the atanh Taylor series through `s^11` (|s| <= 0.172, truncation
+/// < 1e-10), `k ln2` in two parts, `e ln x` by an error-free product, then [`exp`]'s
+/// body on the two-part exponent.
 ///
-/// Max relative error 1.4e-7 for `|e ln x| <= 80` (x positive finite, subnormals
-/// included). Measured in tests/vmath.rs (tested bound 2e-7). Special values as libm:
+/// Measured max relative error 2.0e-7 unfused, 1.7e-7 with FMA, for `|e ln x| <= 80`
+/// and positive finite `x`, subnormals included (tested bound 2.5e-7; the f32 rounding
+/// of `s Q(s^2)` dominates at large `|e|`). Special values as libm:
 /// `pow(x, 0) = pow(1, e) = 1` (even for NaN), `pow(0, e > 0) = 0`, `pow(0, e < 0) =
 /// +inf`, `pow(+inf, e)` = `+inf` / `0`, `e = +-inf` gives the limits, overflow -> +inf,
 /// underflow -> 0; `x < 0` or NaN -> NaN.
