@@ -15,7 +15,7 @@
 
 mod stage;
 
-use crate::closure::{Closure, SampleResult, clamp_randoms};
+use crate::closure::{Closure, ONE_MINUS_EPSILON, SampleResult};
 use crate::error::Error;
 use crate::lobes::flags;
 use crate::math::{Rgb, Vec3};
@@ -535,15 +535,21 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         let closure = input.closures.closure(group.rep).expect("resolved before");
         let k = group.lobe;
         let lobe = closure.lobes()[k].lobe;
-        // The chosen lobe's random numbers: the rescaled lobe choice, then u0, u1.
+        // The chosen lobe's random numbers: the rescaled lobe choice, then u0 and u1
+        // clamped into [0, 1) as `Closure::sample` does.
         let [uc, u0, u1] = rows3(&mut s.u, len);
+        let n = group.lanes.len();
         for (j, &lane) in group.lanes.iter().enumerate() {
             let lane = lane as usize;
-            let [_, a, b] = clamp_randoms([0.0, u.u0[lane], u.u1[lane]]);
-            (uc[j], u0[j], u1[j]) = (s.groups.u_reused[lane - start], a, b);
+            (uc[j], u0[j], u1[j]) = (s.groups.u_reused[lane - start], u.u0[lane], u.u1[lane]);
+        }
+        for row in [&mut *u0, &mut *u1] {
+            for x in &mut row[..n] {
+                *x = x.clamp(0.0, ONE_MINUS_EPSILON);
+            }
         }
         for row in [uc, u0, u1] {
-            row[group.lanes.len()..].fill(0.5);
+            row[n..].fill(0.5);
         }
         let lanes = s.lobe.lanes(input, group, k, len);
         let [sv_r, sv_g, sv_b] = &mut s.sample_value;

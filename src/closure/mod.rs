@@ -265,6 +265,22 @@ impl Closure {
         (l.weight * e.value, e.pdf)
     }
 
+    /// [`Self::eval_one`] and lobe `k`'s reverse pdf, decoding its parameters once.
+    fn eval_one_with_reverse(&self, k: usize, wo: Vec3<f32>, wi: Vec3<f32>) -> EvalResult {
+        let l = &self.lobes[k];
+        let (e, pdf_reverse) = l.lobe.eval_with_reverse(
+            self.lobe_params(k),
+            l.frame.to_local(wo),
+            l.frame.to_local(wi),
+            self.mode,
+        );
+        EvalResult {
+            value: l.weight * e.value,
+            pdf: e.pdf,
+            pdf_reverse,
+        }
+    }
+
     fn mixture(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> (Rgb<f32>, f32) {
         let mut value = Rgb::zero();
         let mut pdf = 0.0;
@@ -283,12 +299,18 @@ impl Closure {
     /// The whole closure at `(wo, wi)` (unit vectors, world space).
     pub fn eval(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<EvalResult, Error> {
         self.check_finished()?;
-        let (value, pdf) = self.mixture(wo, wi);
-        Ok(EvalResult {
-            value,
-            pdf,
-            pdf_reverse: self.mixture_pdf(wi, wo),
-        })
+        let mut sum = EvalResult {
+            value: Rgb::zero(),
+            pdf: 0.0,
+            pdf_reverse: 0.0,
+        };
+        for (k, l) in self.lobes().iter().enumerate() {
+            let e = self.eval_one_with_reverse(k, wo, wi);
+            sum.value = sum.value + e.value;
+            sum.pdf += l.probability * e.pdf;
+            sum.pdf_reverse += l.probability * e.pdf_reverse;
+        }
+        Ok(sum)
     }
 
     /// The mixture pdf of sampling `wi` from `wo`.
@@ -404,12 +426,7 @@ impl Closure {
         wi: Vec3<f32>,
     ) -> Result<EvalResult, Error> {
         self.check_lobe(index)?;
-        let (value, pdf) = self.eval_one(index, wo, wi);
-        Ok(EvalResult {
-            value,
-            pdf,
-            pdf_reverse: self.eval_one(index, wi, wo).1,
-        })
+        Ok(self.eval_one_with_reverse(index, wo, wi))
     }
 
     /// The pdf of lobe `index` alone.

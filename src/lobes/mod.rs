@@ -200,6 +200,20 @@ pub trait LobeType: Send + Sync {
     fn flags(&self) -> u32;
     fn reciprocal(&self) -> bool;
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32>;
+    /// `eval(wo, wi)` and the reverse pdf `eval(wi, wo).pdf` (built-in lobes decode
+    /// their parameters once for both).
+    fn eval_with_reverse(
+        &self,
+        params: &[f32],
+        wo: Vec3<f32>,
+        wi: Vec3<f32>,
+        mode: Transport,
+    ) -> (Eval<f32>, f32) {
+        (
+            self.eval(params, wo, wi, mode),
+            self.eval(params, wi, wo, mode).pdf,
+        )
+    }
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32>;
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32>;
     /// Parameter sets the verification harness covers besides the defaults.
@@ -265,6 +279,16 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         M::eval(&M::prepare(Params::new(params)), wo, wi, mode)
+    }
+    fn eval_with_reverse(
+        &self,
+        params: &[f32],
+        wo: Vec3<f32>,
+        wi: Vec3<f32>,
+        mode: Transport,
+    ) -> (Eval<f32>, f32) {
+        let p = M::prepare(Params::new(params));
+        (M::eval(&p, wo, wi, mode), M::eval(&p, wi, wo, mode).pdf)
     }
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32> {
         M::sample(&M::prepare(Params::new(params)), wo, u[0], u[1], u[2], mode).finish()

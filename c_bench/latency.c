@@ -1,0 +1,114 @@
+/* Scalar C-call latency: the median time of one glint_eval and one glint_sample call
+ * per registered lobe type (a closure holding that lobe alone, default parameters),
+ * measured through the public C ABI as a ray tracer calls it. Prints a Markdown table.
+ *
+ *   build/c_bench/latency [calls-per-repeat]
+ */
+#define _POSIX_C_SOURCE 199309L
+#include <glint.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#define REPEATS 21
+#define DIRS 1024
+
+static double now_ns(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static float next(unsigned long long *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return (float)(*s >> 40) / 16777216.0f;
+}
+
+static void check(glint_status st, const char *what)
+{
+    if (st != GLINT_OK && st != GLINT_NO_SAMPLE) {
+        fprintf(stderr, "%s: %s (%s)\n", what, glint_status_string(st), glint_last_error());
+        exit(1);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    long calls = argc > 1 ? atol(argv[1]) : 200000;
+    glint_runtime *rt = NULL;
+    glint_arena *arena = NULL;
+    static glint_vec3 wo[DIRS], wi[DIRS];
+    static float u[DIRS][3];
+    unsigned long long seed = 0x2545f4914f6cdd1dull;
+    uint32_t count = 0, id;
+    const char *isa = NULL;
+    int i;
+    check(glint_runtime_create(NULL, &rt), "runtime");
+    check(glint_arena_create(64, &arena), "arena");
+    check(glint_lobe_type_count(rt, &count), "count");
+    check(glint_runtime_isa(rt, &isa), "isa");
+    for (i = 0; i < DIRS; i++) {
+        float z = fmaxf(next(&seed), 0.01f), phi = 6.2831853f * next(&seed);
+        float r = sqrtf(1.0f - z * z);
+        wo[i].x = r * cosf(phi), wo[i].y = r * sinf(phi), wo[i].z = z;
+        z = fmaxf(next(&seed), 0.01f), phi = 6.2831853f * next(&seed), r = sqrtf(1.0f - z * z);
+        wi[i].x = r * cosf(phi), wi[i].y = r * sinf(phi), wi[i].z = z;
+        u[i][0] = next(&seed), u[i][1] = next(&seed), u[i][2] = next(&seed);
+    }
+    printf("| lobe | glint_eval (ns) | glint_sample (ns) |\n| --- | --- | --- |\n");
+    for (id = 0; id < count; id++) {
+        glint_lobe_info info;
+        glint_closure *c = NULL;
+        const float weight[3] = {1.0f, 1.0f, 1.0f};
+        const glint_frame frame = {{0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f}};
+        double eval_ns[REPEATS], sample_ns[REPEATS];
+        float sink = 0.0f;
+        int rep;
+        info.struct_size = sizeof info;
+        check(glint_lobe_type_info(rt, id, &info), "info");
+        check(glint_closure_begin(rt, arena, NULL, 0, &c), "begin");
+        check(glint_closure_add_lobe(c, id, weight, &frame, NULL, 0, NULL), "add");
+        check(glint_closure_finish(c), "finish");
+        for (rep = 0; rep < REPEATS; rep++) {
+            double t0 = now_ns();
+            long k;
+            for (k = 0; k < calls; k++) {
+                glint_eval_result r;
+                r.struct_size = sizeof r;
+                check(glint_eval(c, wo[k % DIRS], wi[k % DIRS], &r), "eval");
+                sink += r.pdf;
+            }
+            eval_ns[rep] = (now_ns() - t0) / (double)calls;
+            t0 = now_ns();
+            for (k = 0; k < calls; k++) {
+                glint_sample_result s;
+                const float *uk = u[k % DIRS];
+                s.struct_size = sizeof s;
+                check(glint_sample(c, wo[k % DIRS], uk[0], uk[1], uk[2], &s), "sample");
+                sink += s.pdf;
+            }
+            sample_ns[rep] = (now_ns() - t0) / (double)calls;
+        }
+        qsort(eval_ns, REPEATS, sizeof(double), cmp_double);
+        qsort(sample_ns, REPEATS, sizeof(double), cmp_double);
+        printf("| %s | %.1f | %.1f |\n", info.name, eval_ns[REPEATS / 2], sample_ns[REPEATS / 2]);
+        if (!(sink >= 0.0f))
+            fprintf(stderr, "unexpected pdf sum\n");
+    }
+    printf("\n(median of %d repeats of %ld calls; glint_runtime_isa: %s)\n", REPEATS, calls, isa);
+    glint_arena_destroy(arena);
+    glint_runtime_destroy(rt);
+    return 0;
+}
