@@ -1,7 +1,7 @@
 //! The AVX2 + FMA lane: eight `f32` in a `__m256`, masks as all-ones lanes.
 
-use super::{intrinsic, newton_rsqrt};
-use crate::math::{Lane, Mask, vmath};
+use super::{elementary_functions_from_vmath, intrinsic, newton_rsqrt};
+use crate::math::{Lane, Mask};
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
@@ -174,34 +174,7 @@ impl Lane for F32x8 {
         let y = F32x8(intrinsic!(_mm256_rsqrt_ps(self.0)));
         newton_rsqrt(self, y)
     }
-    #[inline(always)]
-    fn exp(self) -> Self {
-        vmath::exp(self)
-    }
-    #[inline(always)]
-    fn ln(self) -> Self {
-        vmath::ln(self)
-    }
-    #[inline(always)]
-    fn ln_1p(self) -> Self {
-        vmath::ln_1p(self)
-    }
-    #[inline(always)]
-    fn sin_cos(self) -> (Self, Self) {
-        vmath::sin_cos(self)
-    }
-    #[inline(always)]
-    fn acos(self) -> Self {
-        vmath::acos(self)
-    }
-    #[inline(always)]
-    fn atan2(self, x: Self) -> Self {
-        vmath::atan2(self, x)
-    }
-    #[inline(always)]
-    fn pow(self, e: Self) -> Self {
-        vmath::pow(self, e)
-    }
+    elementary_functions_from_vmath!();
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         let s = intrinsic!(_mm256_set1_ps(-0.0));

@@ -2,8 +2,8 @@
 //! Only AVX-512 Foundation instructions are used (integer forms for bit logic,
 //! since the `_ps` logic ops need AVX-512DQ).
 
-use super::{compound_assign, intrinsic, newton_rsqrt};
-use crate::math::{Lane, Mask, vmath};
+use super::{compound_assign, elementary_functions_from_vmath, intrinsic, newton_rsqrt};
+use crate::math::{Lane, Mask};
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
@@ -179,34 +179,7 @@ impl Lane for F32x16 {
         let y = F32x16(intrinsic!(_mm512_rsqrt14_ps(self.0)));
         newton_rsqrt(self, y)
     }
-    #[inline(always)]
-    fn exp(self) -> Self {
-        vmath::exp(self)
-    }
-    #[inline(always)]
-    fn ln(self) -> Self {
-        vmath::ln(self)
-    }
-    #[inline(always)]
-    fn ln_1p(self) -> Self {
-        vmath::ln_1p(self)
-    }
-    #[inline(always)]
-    fn sin_cos(self) -> (Self, Self) {
-        vmath::sin_cos(self)
-    }
-    #[inline(always)]
-    fn acos(self) -> Self {
-        vmath::acos(self)
-    }
-    #[inline(always)]
-    fn atan2(self, x: Self) -> Self {
-        vmath::atan2(self, x)
-    }
-    #[inline(always)]
-    fn pow(self, e: Self) -> Self {
-        vmath::pow(self, e)
-    }
+    elementary_functions_from_vmath!();
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         // Ternary logic 0xE4 = (C & A) | (!C & B) with C the sign mask: sign bit from

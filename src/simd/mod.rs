@@ -92,6 +92,41 @@ macro_rules! compound_assign {
 }
 use compound_assign;
 
+/// The `Lane` methods a SIMD lane type takes from `crate::math::vmath`.
+macro_rules! elementary_functions_from_vmath {
+    () => {
+        #[inline(always)]
+        fn exp(self) -> Self {
+            crate::math::vmath::exp(self)
+        }
+        #[inline(always)]
+        fn ln(self) -> Self {
+            crate::math::vmath::ln(self)
+        }
+        #[inline(always)]
+        fn ln_1p(self) -> Self {
+            crate::math::vmath::ln_1p(self)
+        }
+        #[inline(always)]
+        fn sin_cos(self) -> (Self, Self) {
+            crate::math::vmath::sin_cos(self)
+        }
+        #[inline(always)]
+        fn acos(self) -> Self {
+            crate::math::vmath::acos(self)
+        }
+        #[inline(always)]
+        fn atan2(self, x: Self) -> Self {
+            crate::math::vmath::atan2(self, x)
+        }
+        #[inline(always)]
+        fn pow(self, e: Self) -> Self {
+            crate::math::vmath::pow(self, e)
+        }
+    };
+}
+use elementary_functions_from_vmath;
+
 /// One Newton step `y (3 - x y^2) / 2` on a hardware estimate `y` of `1 / sqrt(x)`,
 /// keeping the estimate where the step is not finite (x = 0 or inf).
 #[inline(always)]

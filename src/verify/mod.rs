@@ -39,8 +39,9 @@ pub const RECIPROCITY_TOLERANCE: f64 = 1e-4;
 /// Maximum [`batch_difference`] between batch and scalar results. The scalar kernels
 /// match the scalar calls exactly; the SIMD kernels fuse multiply-adds and use the
 /// vectorized functions of `math::vmath`, and cancellation (refraction half vectors,
-/// far tails of narrow lobes) amplifies those last-bit differences in small values.
-pub const BATCH_TOLERANCE: f64 = 1e-4;
+/// far tails of narrow lobes) amplifies those last-bit differences: the full tier of
+/// 2026-11-22 measured up to 7.8e-5 (rough dielectrics, AVX2), so the bound is 3x that.
+pub const BATCH_TOLERANCE: f64 = 2.5e-4;
 /// Maximum [`batch_difference`] of sample outputs: the sampled direction itself
 /// moves by the vectorized trigonometry's error, and value, weight and pdf are
 /// evaluated there.
