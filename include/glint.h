@@ -363,7 +363,11 @@ extern "C" {
 #endif // __cplusplus
 
 /*
- `glint_eval` over SoA arrays.
+ `glint_eval` over SoA arrays. Every batch call runs on the kernel set (`isa=`) and
+ threads (`threads=`) of the runtime its closure was built with (with per-lane
+ closures, the first non-NULL one's); lanes are grouped by closure shape, and results
+ do not depend on the thread count. Invalid lanes get zeroed outputs and the call
+ returns the first one's error (`lane i: ...`); the other lanes are computed.
 
  # Safety
  `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`.
