@@ -358,6 +358,20 @@ typedef struct glint_param_info {
 
 #define GLINT_ERROR_PANIC 12
 
+#define GLINT_ERROR_PLUGIN_NOT_FOUND 13
+
+#define GLINT_ERROR_PLUGIN_NOT_LIBRARY 14
+
+#define GLINT_ERROR_PLUGIN_NO_ENTRY 15
+
+#define GLINT_ERROR_PLUGIN_ABI_REFUSED 16
+
+#define GLINT_ERROR_DUPLICATE_NAME 17
+
+#define GLINT_ERROR_PLUGIN_PARAMS 18
+
+#define GLINT_ERROR_PLUGIN_BLOCK_SIZE 19
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -566,7 +580,8 @@ const char *glint_last_error(void);
  Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
  commas or semicolons; valid keys: `isa` (`auto` | `scalar` | `avx2` | `avx512`;
  an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`) and `threads` (0 = one per
- core, the default; 1 = batch calls stay on the calling thread; N = a pool of N).
+ core, the default; 1 = batch calls stay on the calling thread; N = a pool of N) and
+ `plugins` (a directory whose `*.so` plugins are loaded, in file-name order).
 
  # Safety
  `config` is NULL or a NUL-terminated string; `out` is valid for writes.
@@ -590,6 +605,29 @@ void glint_runtime_destroy(struct glint_runtime *runtime);
  `runtime` is NULL or valid; `out` is NULL or writable.
  */
 glint_status glint_runtime_isa(const struct glint_runtime *runtime, const char **out);
+
+/*
+ Load the plugin shared library at `path` (built against `glint_plugin.h`) and
+ register its lobe types, which then work like built-in ones. Plugins are never
+ unloaded. On error nothing is registered, the status names the cause
+ (`GLINT_ERROR_PLUGIN_*`, `GLINT_ERROR_DUPLICATE_NAME`) and the runtime keeps working.
+ Not thread-safe: load plugins before the runtime is shared between threads.
+
+ # Safety
+ `runtime` is NULL or valid and not in use by another thread; `path` NULL or
+ NUL-terminated.
+ */
+glint_status glint_runtime_load_plugin(struct glint_runtime *runtime, const char *path);
+
+/*
+ How many outputs of lobe type `type_id` were zeroed because they were NaN,
+ infinite or negative (values, pdfs) or unusable directions: always 0 for built-in
+ lobes; for a plugin lobe, a nonzero count means the plugin is broken.
+
+ # Safety
+ `runtime` is NULL or valid; `out` is NULL or writable.
+ */
+glint_status glint_lobe_sanitized_count(const struct glint_runtime *runtime, uint32_t type_id, uint64_t *out);
 
 /*
  Number of registered lobe types; their ids are `0 .. count - 1`.

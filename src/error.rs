@@ -21,10 +21,17 @@ pub enum Status {
     Unsupported = 10,
     NoSample = 11,
     Panic = 12,
+    PluginNotFound = 13,
+    PluginNotLibrary = 14,
+    PluginNoEntry = 15,
+    PluginAbiRefused = 16,
+    DuplicateName = 17,
+    PluginParams = 18,
+    PluginBlockSize = 19,
 }
 
 impl Status {
-    pub const ALL: [Status; 13] = [
+    pub const ALL: [Status; 20] = [
         Status::Ok,
         Status::NullPointer,
         Status::InvalidArgument,
@@ -38,6 +45,13 @@ impl Status {
         Status::Unsupported,
         Status::NoSample,
         Status::Panic,
+        Status::PluginNotFound,
+        Status::PluginNotLibrary,
+        Status::PluginNoEntry,
+        Status::PluginAbiRefused,
+        Status::DuplicateName,
+        Status::PluginParams,
+        Status::PluginBlockSize,
     ];
 
     /// A static description, NUL-terminated so the C API can hand it out as is.
@@ -58,6 +72,17 @@ impl Status {
             Status::Unsupported => c"not supported by this build or machine",
             Status::NoSample => c"no sample: the closure cannot scatter from this direction",
             Status::Panic => c"internal error (a panic was caught at the API boundary)",
+            Status::PluginNotFound => c"plugin file not found",
+            Status::PluginNotLibrary => c"plugin file is not a loadable shared library",
+            Status::PluginNoEntry => c"plugin does not export glint_plugin_entry",
+            Status::PluginAbiRefused => {
+                c"plugin ABI version refused (by the plugin or by this library)"
+            }
+            Status::DuplicateName => c"a lobe type with this name is already registered",
+            Status::PluginParams => c"malformed plugin lobe declaration or parameter table",
+            Status::PluginBlockSize => {
+                c"plugin parameter block size or alignment does not match its table"
+            }
         }
     }
 }

@@ -13,6 +13,7 @@ pub mod lobes;
 pub mod math;
 pub mod microfacet;
 pub mod params;
+pub mod plugin;
 pub mod registry;
 pub mod runtime;
 pub mod simd;

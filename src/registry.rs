@@ -34,7 +34,7 @@ impl Registry {
     pub fn register(&mut self, lobe: &'static dyn LobeType) -> Result<u32, Error> {
         if self.find(lobe.name()).is_ok() {
             return Err(Error::new(
-                Status::InvalidArgument,
+                Status::DuplicateName,
                 format!(
                     "a lobe type named \"{}\" is already registered",
                     lobe.name()

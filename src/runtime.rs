@@ -4,8 +4,10 @@
 
 use crate::batch::{Exec, Threads};
 use crate::error::{Error, Status};
+use crate::plugin;
 use crate::registry::Registry;
 use crate::simd::{Isa, Kernels};
+use std::path::Path;
 
 /// Which kernel set batch calls use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,6 +25,8 @@ pub struct Settings {
     /// Threads for large batches: 0 = rayon's global pool (one per core), 1 = the
     /// calling thread only, N = a pool of N threads owned by the runtime.
     pub threads: usize,
+    /// A directory whose `*.so` plugins are loaded when the runtime is created.
+    pub plugins: Option<String>,
 }
 
 impl Default for Settings {
@@ -30,12 +34,13 @@ impl Default for Settings {
         Settings {
             isa: IsaSetting::Auto,
             threads: 0,
+            plugins: None,
         }
     }
 }
 
 /// Configuration keys `Settings::parse` accepts.
-pub const CONFIG_KEYS: &[&str] = &["isa", "threads"];
+pub const CONFIG_KEYS: &[&str] = &["isa", "threads", "plugins"];
 
 /// Most threads `threads=N` accepts.
 pub const MAX_THREADS: usize = 1024;
@@ -91,6 +96,7 @@ impl Settings {
                             )
                         })?
                 }
+                "plugins" => settings.plugins = Some(value.to_string()),
                 _ => {
                     return Err(Error::new(
                         Status::UnknownName,
@@ -136,12 +142,24 @@ impl Runtime {
                     })?,
             ),
         };
-        Ok(Runtime {
+        let mut runtime = Runtime {
             registry: Registry::with_builtins(),
             settings,
             kernels,
             pool,
-        })
+        };
+        if let Some(dir) = runtime.settings.plugins.clone() {
+            for path in plugin::plugins_in(Path::new(&dir))? {
+                runtime.load_plugin(&path)?;
+            }
+        }
+        Ok(runtime)
+    }
+
+    /// Load a plugin and register its lobe types (see `crate::plugin`); returns their
+    /// ids. On error nothing is registered.
+    pub fn load_plugin(&mut self, path: &Path) -> Result<Vec<u32>, Error> {
+        plugin::load(&mut self.registry, path)
     }
 
     /// The kernel set batch calls use.

@@ -29,7 +29,7 @@ fn defaults_and_valid_values() {
     );
     assert_eq!(Settings::parse("threads=3").unwrap().threads, 3);
     assert_eq!(Settings::parse("").unwrap().threads, 0);
-    assert_eq!(CONFIG_KEYS, ["isa", "threads"]);
+    assert_eq!(CONFIG_KEYS, ["isa", "threads", "plugins"]);
     let rt = Runtime::new("isa=scalar").unwrap();
     assert_eq!(rt.settings.isa, IsaSetting::Only(Isa::Scalar));
     assert_eq!(rt.kernels(), Kernels::scalar());

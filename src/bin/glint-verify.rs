@@ -1,16 +1,19 @@
 //! `glint-verify`: run the verification harness and write `target/verify/report.md`
 //! and `report.json`.
 //!
-//! Usage: `glint-verify [--all | --lobe NAME]... [--fast] [--out DIR]`
-//! (default: every registered lobe, full tier, `target/verify`). Exits 1 when a check fails.
+//! Usage: `glint-verify [--all | --lobe NAME | --plugin PATH]... [--fast] [--out DIR]`
+//! (default: every registered lobe, full tier, `target/verify`). `--plugin` loads a
+//! plugin and verifies its lobe types (all of them unless `--lobe` names some).
+//! Exits 1 when a check fails, 2 when a plugin does not load.
 
 use glint::registry::Registry;
 use glint::verify::{self, Report, Tier};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let registry = Registry::with_builtins();
+    let mut registry = Registry::with_builtins();
+    let mut plugin_lobes: Vec<u32> = Vec::new();
     let mut tier = Tier::Full;
     let mut names: Vec<String> = Vec::new();
     let mut out = PathBuf::from("target/verify");
@@ -23,6 +26,16 @@ fn main() -> ExitCode {
                 Some(n) => names.push(n),
                 None => return usage("--lobe needs a name"),
             },
+            "--plugin" => match args.next() {
+                Some(path) => match glint::plugin::load(&mut registry, Path::new(&path)) {
+                    Ok(ids) => plugin_lobes.extend(ids),
+                    Err(e) => {
+                        eprintln!("glint-verify: {}", e.message);
+                        return ExitCode::from(2);
+                    }
+                },
+                None => return usage("--plugin needs a path"),
+            },
             "--out" => match args.next() {
                 Some(d) => out = PathBuf::from(d),
                 None => return usage("--out needs a directory"),
@@ -32,7 +45,9 @@ fn main() -> ExitCode {
         }
     }
     let mut lobes = Vec::new();
-    if names.is_empty() {
+    if names.is_empty() && !plugin_lobes.is_empty() {
+        lobes.extend(plugin_lobes.iter().filter_map(|&id| registry.get(id).ok()));
+    } else if names.is_empty() {
         lobes.extend(registry.iter());
     } else {
         for n in &names {
@@ -77,6 +92,6 @@ fn usage(problem: &str) -> ExitCode {
     if !problem.is_empty() {
         eprintln!("glint-verify: {problem}");
     }
-    eprintln!("usage: glint-verify [--all | --lobe NAME]... [--fast] [--out DIR]");
+    eprintln!("usage: glint-verify [--all | --lobe NAME | --plugin PATH]... [--fast] [--out DIR]");
     ExitCode::from(2)
 }

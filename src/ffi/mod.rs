@@ -38,6 +38,13 @@ pub const GLINT_ERROR_UNSUPPORTED: glint_status = 10;
 /// zeroed and `glint_last_error` is left unchanged).
 pub const GLINT_NO_SAMPLE: glint_status = 11;
 pub const GLINT_ERROR_PANIC: glint_status = 12;
+pub const GLINT_ERROR_PLUGIN_NOT_FOUND: glint_status = 13;
+pub const GLINT_ERROR_PLUGIN_NOT_LIBRARY: glint_status = 14;
+pub const GLINT_ERROR_PLUGIN_NO_ENTRY: glint_status = 15;
+pub const GLINT_ERROR_PLUGIN_ABI_REFUSED: glint_status = 16;
+pub const GLINT_ERROR_DUPLICATE_NAME: glint_status = 17;
+pub const GLINT_ERROR_PLUGIN_PARAMS: glint_status = 18;
+pub const GLINT_ERROR_PLUGIN_BLOCK_SIZE: glint_status = 19;
 
 pub const GLINT_VERSION_MAJOR: u32 = 0;
 pub const GLINT_VERSION_MINOR: u32 = 1;

@@ -30,24 +30,34 @@ pub struct glint_runtime {
 
 impl glint_runtime {
     fn new(runtime: Runtime) -> Self {
-        let strings = runtime
-            .registry
-            .iter()
-            .map(|t| LobeStrings {
-                name: c_string(t.name()),
-                summary: c_string(t.summary()),
-                params: t
-                    .params()
-                    .iter()
-                    .map(|p| ParamStrings {
-                        name: c_string(p.name),
-                        choices: c_string(&p.choices().join("|")),
-                        doc: c_string(p.doc),
-                    })
-                    .collect(),
-            })
-            .collect();
-        glint_runtime { runtime, strings }
+        let mut rt = glint_runtime {
+            runtime,
+            strings: Vec::new(),
+        };
+        rt.cache_strings();
+        rt
+    }
+
+    /// C strings for lobe types registered since the last call. Existing strings
+    /// never move (each `CString` owns its buffer), so pointers handed out stay valid.
+    fn cache_strings(&mut self) {
+        let known = self.strings.len();
+        self.strings
+            .extend(self.runtime.registry.iter().skip(known).map(|t| {
+                LobeStrings {
+                    name: c_string(t.name()),
+                    summary: c_string(t.summary()),
+                    params: t
+                        .params()
+                        .iter()
+                        .map(|p| ParamStrings {
+                            name: c_string(p.name),
+                            choices: c_string(&p.choices().join("|")),
+                            doc: c_string(p.doc),
+                        })
+                        .collect(),
+                }
+            }));
     }
 }
 
@@ -129,7 +139,8 @@ pub extern "C" fn glint_last_error() -> *const c_char {
 /// Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
 /// commas or semicolons; valid keys: `isa` (`auto` | `scalar` | `avx2` | `avx512`;
 /// an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`) and `threads` (0 = one per
-/// core, the default; 1 = batch calls stay on the calling thread; N = a pool of N).
+/// core, the default; 1 = batch calls stay on the calling thread; N = a pool of N) and
+/// `plugins` (a directory whose `*.so` plugins are loaded, in file-name order).
 ///
 /// # Safety
 /// `config` is NULL or a NUL-terminated string; `out` is valid for writes.
@@ -190,6 +201,52 @@ pub unsafe extern "C" fn glint_runtime_isa(
         };
         // SAFETY: per the contract.
         unsafe { write_out(out, "out", name.as_ptr()) }
+    })
+}
+
+/// Load the plugin shared library at `path` (built against `glint_plugin.h`) and
+/// register its lobe types, which then work like built-in ones. Plugins are never
+/// unloaded. On error nothing is registered, the status names the cause
+/// (`GLINT_ERROR_PLUGIN_*`, `GLINT_ERROR_DUPLICATE_NAME`) and the runtime keeps working.
+/// Not thread-safe: load plugins before the runtime is shared between threads.
+///
+/// # Safety
+/// `runtime` is NULL or valid and not in use by another thread; `path` NULL or
+/// NUL-terminated.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_runtime_load_plugin(
+    runtime: *mut glint_runtime,
+    path: *const c_char,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref_mut(runtime, "runtime") }?;
+        // SAFETY: per the contract.
+        let path = unsafe { c_str(path, "path") }?;
+        rt.runtime.load_plugin(std::path::Path::new(path))?;
+        rt.cache_strings();
+        Ok(())
+    })
+}
+
+/// How many outputs of lobe type `type_id` were zeroed because they were NaN,
+/// infinite or negative (values, pdfs) or unusable directions: always 0 for built-in
+/// lobes; for a plugin lobe, a nonzero count means the plugin is broken.
+///
+/// # Safety
+/// `runtime` is NULL or valid; `out` is NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_lobe_sanitized_count(
+    runtime: *const glint_runtime,
+    type_id: u32,
+    out: *mut u64,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let rt = unsafe { deref(runtime, "runtime") }?;
+        let count = rt.runtime.registry.get(type_id)?.sanitized_count();
+        // SAFETY: per the contract.
+        unsafe { write_out(out, "out", count) }
     })
 }
 

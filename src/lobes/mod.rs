@@ -222,6 +222,11 @@ pub trait LobeType: Send + Sync {
     }
     /// Documented relative accuracy of `albedo` with these parameters.
     fn albedo_tolerance(&self, params: &[f32]) -> f32;
+    /// Outputs zeroed because they were NaN, infinite or negative (plugin lobes; the
+    /// built-in lobes never produce them).
+    fn sanitized_count(&self) -> u64 {
+        0
+    }
 
     /// `eval` over a group of lanes (the batch kernels). The default loops over
     /// [`LobeType::eval`]; built-in lobes run their SIMD kernels.

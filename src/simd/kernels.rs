@@ -327,7 +327,7 @@ kernel!(
 
 impl LobeLanes<'_> {
     /// Lane `i`'s parameter block (into `params`), frame, weight and probability.
-    fn lane(&self, i: usize, params: &mut Vec<f32>) -> (Frame, Rgb<f32>, f32) {
+    pub(crate) fn lane(&self, i: usize, params: &mut Vec<f32>) -> (Frame, Rgb<f32>, f32) {
         params.clear();
         match *self {
             LobeLanes::Uniform {

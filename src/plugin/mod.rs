@@ -1,0 +1,526 @@
+//! Plugin lobe types: shared libraries built against `include/glint_plugin.h` that
+//! export `glint_plugin_entry`. [`load`] opens one with libloading, negotiates the ABI
+//! version, validates every lobe declaration and parameter table, and only then
+//! registers the lobe types, so a failure never leaves a half-registered plugin.
+//! Libraries are never unloaded (unloading code with thread-local state crashes).
+//!
+//! A [`PluginLobe`] is a [`LobeType`] like any built-in: closures, JSON, batches and
+//! the verification harness use it unchanged. Its outputs are sanitized: NaN,
+//! infinite or negative values and pdfs, and unusable directions, are zeroed and
+//! counted ([`LobeType::sanitized_count`]).
+
+mod abi;
+
+use crate::error::{Error, Status};
+use crate::lobes::{Eval, LobeType, Sample, Transport, flags};
+use crate::math::{Rgb, Vec3};
+use crate::params::{self, ParamKind, ParamSpec};
+use crate::registry::Registry;
+use crate::simd::Kernels;
+use crate::simd::kernels::{self, EvalJob};
+use std::ffi::{CStr, c_char, c_void};
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+pub use abi::HOST_ABI_VERSION;
+
+/// Relative accuracy the harness holds a plugin lobe's `albedo` to (the V1 ABI has
+/// no field to declare one).
+pub const PLUGIN_ALBEDO_TOLERANCE: f32 = 0.1;
+
+/// Load the plugin at `path` and register its lobe types; returns their ids.
+pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
+    let shown = path.display();
+    if !path.is_file() {
+        return Err(Error::new(
+            Status::PluginNotFound,
+            format!("plugin {shown}: no such file"),
+        ));
+    }
+    // SAFETY: loading runs the library's initializers; plugins are trusted native code
+    // by contract (glint_plugin.h), as any library a host links.
+    let library = unsafe { libloading::Library::new(path) }.map_err(|e| {
+        Error::new(
+            Status::PluginNotLibrary,
+            format!("plugin {shown}: not a loadable shared library ({e})"),
+        )
+    })?;
+    // SAFETY: the symbol's type is the one glint_plugin.h declares for this name.
+    let entry = unsafe { library.get::<abi::EntryFn>(b"glint_plugin_entry\0") }.map_err(|_| {
+        Error::new(
+            Status::PluginNoEntry,
+            format!("plugin {shown}: does not export glint_plugin_entry"),
+        )
+    })?;
+    let mut version = 0u32;
+    let mut table: *const c_void = std::ptr::null();
+    // SAFETY: the entry's contract (glint_plugin.h); both out-pointers are valid.
+    let refused = unsafe { entry(HOST_ABI_VERSION, &mut version, &mut table) };
+    if refused != 0 {
+        return Err(Error::new(
+            Status::PluginAbiRefused,
+            format!(
+                "plugin {shown}: refused ABI version {HOST_ABI_VERSION} (glint_plugin_entry returned {refused})"
+            ),
+        ));
+    }
+    if version != HOST_ABI_VERSION {
+        return Err(Error::new(
+            Status::PluginAbiRefused,
+            format!(
+                "plugin {shown}: answered ABI version {version}; this library speaks 1..={HOST_ABI_VERSION}"
+            ),
+        ));
+    }
+    let malformed =
+        |what: String| Error::new(Status::PluginParams, format!("plugin {shown}: {what}"));
+    // SAFETY: a version-1 plugin hands out a `glint_plugin_v1` table that lives forever
+    // (glint_plugin.h); NULL is checked.
+    let table = unsafe { (table as *const abi::PluginV1).as_ref() }
+        .ok_or_else(|| malformed("glint_plugin_entry returned no table".into()))?;
+    if (table.struct_size as usize) < size_of::<abi::PluginV1>() {
+        return Err(malformed(format!(
+            "glint_plugin_v1.struct_size {} < {}",
+            table.struct_size,
+            size_of::<abi::PluginV1>()
+        )));
+    }
+    if table.lobe_count > 0 && table.lobes.is_null() {
+        return Err(malformed("lobes is NULL".into()));
+    }
+    let mut lobes = Vec::with_capacity(table.lobe_count as usize);
+    for i in 0..table.lobe_count as usize {
+        // SAFETY: `lobes` holds `lobe_count` declarations (checked non-NULL above).
+        let decl = unsafe { &*table.lobes.add(i) };
+        let lobe = PluginLobe::new(decl).map_err(|e| {
+            Error::new(e.status, format!("plugin {shown}: lobe {i}: {}", e.message))
+        })?;
+        if registry.find(lobe.name).is_ok()
+            || lobes.iter().any(|l: &PluginLobe| l.name == lobe.name)
+        {
+            return Err(Error::new(
+                Status::DuplicateName,
+                format!(
+                    "plugin {shown}: a lobe type named \"{}\" is already registered",
+                    lobe.name
+                ),
+            ));
+        }
+        lobes.push(lobe);
+    }
+    // Never unloaded: the lobe types' callbacks point into the library.
+    std::mem::forget(library);
+    lobes
+        .into_iter()
+        .map(|l| registry.register(Box::leak(Box::new(l))))
+        .collect()
+}
+
+/// Every `*.so` file in `dir`, in file-name order.
+pub fn plugins_in(dir: &Path) -> Result<Vec<std::path::PathBuf>, Error> {
+    let entries = std::fs::read_dir(dir).map_err(|e| {
+        Error::new(
+            Status::PluginNotFound,
+            format!("plugins={}: cannot read the directory ({e})", dir.display()),
+        )
+    })?;
+    let mut paths: Vec<_> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "so"))
+        .collect();
+    paths.sort();
+    Ok(paths)
+}
+
+/// A lobe type declared by a plugin.
+pub struct PluginLobe {
+    name: &'static str,
+    summary: &'static str,
+    params: &'static [ParamSpec],
+    flags: u32,
+    reciprocal: bool,
+    eval: abi::EvalFn,
+    sample: abi::SampleFn,
+    albedo: abi::AlbedoFn,
+    eval_batch: Option<abi::EvalBatchFn>,
+    sanitized: AtomicU64,
+}
+
+/// A string the plugin owns forever, checked: non-NULL UTF-8.
+fn plugin_str(p: *const c_char, what: &str) -> Result<&'static str, Error> {
+    if p.is_null() {
+        return Err(Error::new(Status::PluginParams, format!("{what} is NULL")));
+    }
+    // SAFETY: non-NULL, NUL-terminated and static by the ABI contract.
+    unsafe { CStr::from_ptr(p) }
+        .to_str()
+        .map_err(|_| Error::new(Status::PluginParams, format!("{what} is not UTF-8")))
+}
+
+/// Lobe and parameter names: `[a-z0-9_]+`.
+fn identifier(p: *const c_char, what: &str) -> Result<&'static str, Error> {
+    let s = plugin_str(p, what)?;
+    if s.is_empty()
+        || !s
+            .bytes()
+            .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_')
+    {
+        return Err(Error::new(
+            Status::PluginParams,
+            format!("{what} \"{s}\" is not a name of [a-z0-9_]+"),
+        ));
+    }
+    Ok(s)
+}
+
+const ALL_FLAGS: u32 =
+    flags::REFLECTION | flags::TRANSMISSION | flags::DIFFUSE | flags::GLOSSY | flags::SPECULAR;
+
+impl PluginLobe {
+    /// Validate a declaration.
+    fn new(d: &abi::LobeV1) -> Result<PluginLobe, Error> {
+        let bad = |m: String| Error::new(Status::PluginParams, m);
+        if (d.struct_size as usize) < size_of::<abi::LobeV1>() {
+            return Err(bad(format!(
+                "glint_plugin_lobe_v1.struct_size {} < {}",
+                d.struct_size,
+                size_of::<abi::LobeV1>()
+            )));
+        }
+        let name = identifier(d.name, "name")?;
+        let summary = plugin_str(d.summary, "summary")?;
+        let context = |e: Error| Error::new(e.status, format!("{name}: {}", e.message));
+        let (Some(eval), Some(sample), Some(albedo)) = (d.eval, d.sample, d.albedo) else {
+            return Err(bad(format!(
+                "{name}: eval, sample and albedo must not be NULL"
+            )));
+        };
+        if d.flags & !ALL_FLAGS != 0 || d.flags & (flags::REFLECTION | flags::TRANSMISSION) == 0 {
+            return Err(bad(format!(
+                "{name}: flags {:#x}: must be GLINT_PLUGIN_FLAG_* bits including a side",
+                d.flags
+            )));
+        }
+        if d.reciprocal > 1 {
+            return Err(bad(format!("{name}: reciprocal must be 0 or 1")));
+        }
+        let params = param_table(d).map_err(context)?;
+        let floats = params::block_size(params);
+        if d.block_size as usize != 4 * floats || d.block_align != 4 {
+            return Err(Error::new(
+                Status::PluginBlockSize,
+                format!(
+                    "{name}: block_size {} and block_align {} must be {} and 4 (the table's {floats} floats)",
+                    d.block_size,
+                    d.block_align,
+                    4 * floats
+                ),
+            ));
+        }
+        if floats > crate::closure::MAX_PARAM_VALUES {
+            return Err(Error::new(
+                Status::PluginBlockSize,
+                format!(
+                    "{name}: {floats} parameter floats exceed a closure's {}",
+                    crate::closure::MAX_PARAM_VALUES
+                ),
+            ));
+        }
+        Ok(PluginLobe {
+            name,
+            summary,
+            params,
+            flags: d.flags,
+            reciprocal: d.reciprocal == 1,
+            eval,
+            sample,
+            albedo,
+            eval_batch: d.eval_batch,
+            sanitized: AtomicU64::new(0),
+        })
+    }
+
+    fn count(&self, n: u64) {
+        if n > 0 {
+            self.sanitized.fetch_add(n, Ordering::Relaxed);
+        }
+    }
+
+    /// `v` if finite and >= 0, else 0 (counted).
+    fn clean(&self, v: f32) -> f32 {
+        if v.is_finite() && v >= 0.0 {
+            v
+        } else {
+            self.count(1);
+            0.0
+        }
+    }
+
+    fn clean_rgb(&self, c: [f32; 3]) -> Rgb<f32> {
+        Rgb::new(self.clean(c[0]), self.clean(c[1]), self.clean(c[2]))
+    }
+}
+
+/// The parameter table as a schema, checked: the packed layout in table order.
+fn param_table(d: &abi::LobeV1) -> Result<&'static [ParamSpec], Error> {
+    let bad = |m: String| Error::new(Status::PluginParams, m);
+    if d.param_count > 0 && d.params.is_null() {
+        return Err(bad("params is NULL".into()));
+    }
+    let mut specs = Vec::with_capacity(d.param_count as usize);
+    let mut offset = 0usize;
+    for i in 0..d.param_count as usize {
+        // SAFETY: `params` holds `param_count` entries (checked non-NULL above).
+        let p = unsafe { &*d.params.add(i) };
+        let name = identifier(p.name, &format!("parameter {i} name"))?;
+        let doc = if p.doc.is_null() {
+            ""
+        } else {
+            plugin_str(p.doc, "doc")?
+        };
+        let kind = match p.kind {
+            abi::PARAM_FLOAT => ParamKind::Float,
+            abi::PARAM_RGB => ParamKind::Rgb,
+            abi::PARAM_ENUM => {
+                if p.choice_count == 0 || p.choices.is_null() {
+                    return Err(bad(format!("parameter {name}: an enum needs choices")));
+                }
+                let choices: Vec<&'static str> = (0..p.choice_count as usize)
+                    // SAFETY: `choices` holds `choice_count` strings (non-NULL checked).
+                    .map(|c| {
+                        identifier(unsafe { *p.choices.add(c) }, &format!("{name} choice {c}"))
+                    })
+                    .collect::<Result<_, _>>()?;
+                ParamKind::Enum(Box::leak(choices.into_boxed_slice()))
+            }
+            k => return Err(bad(format!("parameter {name}: unknown type {k}"))),
+        };
+        if p.offset as usize != 4 * offset {
+            return Err(bad(format!(
+                "parameter {name}: offset {} is not the packed layout's {} (floats in table order)",
+                p.offset,
+                4 * offset
+            )));
+        }
+        if specs.iter().any(|s: &ParamSpec| s.name == name) {
+            return Err(bad(format!("parameter {name} is declared twice")));
+        }
+        let spec = match kind {
+            ParamKind::Enum(choices) => {
+                let index = p.default_value[0];
+                if !(index >= 0.0 && (index as usize) < choices.len() && index.fract() == 0.0) {
+                    return Err(bad(format!(
+                        "parameter {name}: default choice {index} out of range"
+                    )));
+                }
+                ParamSpec::choice(name, choices, index as usize, doc)
+            }
+            _ => {
+                if !(p.min.is_finite() && p.max.is_finite() && p.min <= p.max) {
+                    return Err(bad(format!(
+                        "parameter {name}: range [{}, {}] is not finite with min <= max",
+                        p.min, p.max
+                    )));
+                }
+                let n = kind.size();
+                if let Some(v) = p.default_value[..n]
+                    .iter()
+                    .find(|v| !(p.min..=p.max).contains(*v))
+                {
+                    return Err(bad(format!(
+                        "parameter {name}: default {v} outside [{}, {}]",
+                        p.min, p.max
+                    )));
+                }
+                ParamSpec {
+                    name,
+                    kind,
+                    default: if n == 1 {
+                        [p.default_value[0]; 3]
+                    } else {
+                        p.default_value
+                    },
+                    min: p.min,
+                    max: p.max,
+                    doc,
+                }
+            }
+        };
+        offset += kind.size();
+        specs.push(spec);
+    }
+    Ok(Box::leak(specs.into_boxed_slice()))
+}
+
+fn transport(mode: Transport) -> u32 {
+    match mode {
+        Transport::Radiance => 0,
+        Transport::Importance => 1,
+    }
+}
+
+impl LobeType for PluginLobe {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn summary(&self) -> &str {
+        self.summary
+    }
+    fn params(&self) -> &[ParamSpec] {
+        self.params
+    }
+    fn flags(&self) -> u32 {
+        self.flags
+    }
+    fn reciprocal(&self) -> bool {
+        self.reciprocal
+    }
+
+    fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
+        let (mut value, mut pdf) = ([0.0f32; 3], 0.0f32);
+        // SAFETY: the callback was checked non-NULL; `params` is this type's validated
+        // block; every pointer is valid for the call (glint_plugin.h contract).
+        unsafe {
+            (self.eval)(
+                params.as_ptr().cast(),
+                &[wo.x, wo.y, wo.z],
+                &[wi.x, wi.y, wi.z],
+                transport(mode),
+                &mut value,
+                &mut pdf,
+            )
+        };
+        Eval {
+            value: self.clean_rgb(value),
+            pdf: self.clean(pdf),
+        }
+    }
+
+    fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32> {
+        let mut s = abi::Sample::default();
+        // SAFETY: as in `eval`.
+        let produced = unsafe {
+            (self.sample)(
+                params.as_ptr().cast(),
+                &[wo.x, wo.y, wo.z],
+                &u,
+                transport(mode),
+                &mut s,
+            )
+        };
+        if produced == 0 {
+            return crate::lobes::no_sample();
+        }
+        let wi = Vec3::new(s.wi[0], s.wi[1], s.wi[2]);
+        let length = wi.length_squared().sqrt();
+        if !(length.is_finite() && (length - 1.0).abs() < 1e-3) {
+            self.count(1);
+            return crate::lobes::no_sample();
+        }
+        let eta = if s.eta.is_finite() && s.eta > 0.0 {
+            s.eta
+        } else {
+            self.count(1);
+            1.0
+        };
+        Sample {
+            wi: wi.normalize(),
+            value: self.clean_rgb(s.value),
+            pdf: self.clean(s.pdf),
+            valid: true,
+            transmitted: s.events & abi::EVENT_TRANSMITTED != 0,
+            delta: s.events & abi::EVENT_DELTA != 0,
+            eta,
+            roughness: if s.roughness.is_finite() {
+                s.roughness.clamp(0.0, 1.0)
+            } else {
+                0.0
+            },
+        }
+        .finish()
+    }
+
+    fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
+        let mut albedo = [0.0f32; 3];
+        // SAFETY: as in `eval`.
+        unsafe {
+            (self.albedo)(
+                params.as_ptr().cast(),
+                &[wo.x, wo.y, wo.z],
+                transport(mode),
+                &mut albedo,
+            )
+        };
+        self.clean_rgb(albedo)
+    }
+
+    fn albedo_tolerance(&self, _params: &[f32]) -> f32 {
+        PLUGIN_ALBEDO_TOLERANCE
+    }
+
+    fn sanitized_count(&self) -> u64 {
+        self.sanitized.load(Ordering::Relaxed)
+    }
+
+    fn eval_lanes(&self, _kernels: Kernels, job: &mut EvalJob<'_>) {
+        let Some(batch) = self.eval_batch else {
+            return kernels::eval_each_lane(job, |params, wo, wi, mode| {
+                self.eval(params, wo, wi, mode)
+            });
+        };
+        let n = job.len;
+        // Local directions and per-lane parameter blocks, then one callback for all lanes.
+        let mut local = vec![[0.0f32; 6]; n];
+        let mut blocks: Vec<Vec<f32>> = Vec::with_capacity(n);
+        let mut weights = Vec::with_capacity(n);
+        for (i, l) in local.iter_mut().enumerate() {
+            let mut block = Vec::new();
+            let (frame, weight, probability) = job.lobe.lane(i, &mut block);
+            let wo = frame.to_local(Vec3::new(job.wo[0][i], job.wo[1][i], job.wo[2][i]));
+            let wi = frame.to_local(Vec3::new(job.wi[0][i], job.wi[1][i], job.wi[2][i]));
+            *l = [wo.x, wo.y, wo.z, wi.x, wi.y, wi.z];
+            blocks.push(block);
+            weights.push((weight, probability));
+        }
+        let column = |k: usize| local.iter().map(|l| l[k]).collect::<Vec<f32>>();
+        let (wo_x, wo_y, wo_z, wi_x, wi_y, wi_z) = (
+            column(0),
+            column(1),
+            column(2),
+            column(3),
+            column(4),
+            column(5),
+        );
+        let pointers: Vec<*const c_void> = blocks.iter().map(|b| b.as_ptr().cast()).collect();
+        let (mut r, mut g, mut b, mut pdf) =
+            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let args = abi::EvalBatch {
+            struct_size: size_of::<abi::EvalBatch>() as u32,
+            transport: transport(job.mode),
+            count: n,
+            params: pointers.as_ptr(),
+            wo_x: wo_x.as_ptr(),
+            wo_y: wo_y.as_ptr(),
+            wo_z: wo_z.as_ptr(),
+            wi_x: wi_x.as_ptr(),
+            wi_y: wi_y.as_ptr(),
+            wi_z: wi_z.as_ptr(),
+            value_r: r.as_mut_ptr(),
+            value_g: g.as_mut_ptr(),
+            value_b: b.as_mut_ptr(),
+            pdf: pdf.as_mut_ptr(),
+        };
+        // SAFETY: every array holds `n` elements and outlives the call; the parameter
+        // blocks are this type's validated blocks.
+        unsafe { batch(&args) };
+        for (i, (weight, probability)) in weights.into_iter().enumerate() {
+            let value = weight * self.clean_rgb([r[i], g[i], b[i]]);
+            if let Some(rows) = &mut job.value {
+                for (row, v) in rows.iter_mut().zip(value.to_array()) {
+                    row[i] += v;
+                }
+            }
+            job.pdf[i] += probability * self.clean(pdf[i]);
+        }
+    }
+}
