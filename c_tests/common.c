@@ -169,6 +169,13 @@ glint_closure *json_closure(const fixture *fx, const char *json, const glint_vec
     return c;
 }
 
+void fill_floats(float *a, size_t n, float v)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        a[i] = v;
+}
+
 float close_tol(float a, float b, float rel)
 {
     return rel * fmaxf(fabsf(a), fabsf(b)) + 1e-7f;

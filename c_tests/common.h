@@ -82,6 +82,9 @@ glint_closure *all_types_closure(const fixture *fx, const glint_vec3 *wo);
 /* Absolute tolerance for a relative comparison of a and b. */
 float close_tol(float a, float b, float rel);
 
+/* a[0 .. n) = v. */
+void fill_floats(float *a, size_t n, float v);
+
 /* |a - b| <= rel * max(|a|, |b|) + 1e-7 (prints both values with %g on failure). */
 #define assert_close(a, b, rel)                                                          \
     do {                                                                                 \

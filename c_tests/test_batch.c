@@ -111,9 +111,7 @@ static glint_vec3 lane_wi(const batch_fixture *bf, int i)
 
 static void fill(float *a, float v)
 {
-    int i;
-    for (i = 0; i < N; i++)
-        a[i] = v;
+    fill_floats(a, N, v);
 }
 
 static void fillu(uint32_t *a, uint32_t v)

@@ -26,7 +26,8 @@
  *    value = the reflected/transmitted fraction and pdf = the discrete probability.
  *  - albedo writes the directional albedo: the integral of eval's value over all wi.
  *  - Never return NaN, infinities or negative values or pdfs. Glint zeroes such outputs
- *    (and counts them: glint_plugin_sanitized_count), so one bad plugin cannot poison a
+ *    (and counts them: glint_lobe_sanitized_count in glint.h; glint-verify fails a lobe
+ *    that needed it), so one bad plugin cannot poison a
  *    render, but a lobe that needs this is broken.
  *  - Callbacks are called concurrently from many threads: they must be reentrant and
  *    must not keep state between calls.

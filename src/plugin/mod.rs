@@ -12,7 +12,7 @@
 mod abi;
 
 use crate::error::{Error, Status};
-use crate::lobes::{Eval, LobeType, Sample, Transport, flags};
+use crate::lobes::{Eval, LobeType, Sample, Transport, VerifyCase, flags};
 use crate::math::{Rgb, Vec3};
 use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::Registry;
@@ -143,6 +143,8 @@ pub struct PluginLobe {
     sample: abi::SampleFn,
     albedo: abi::AlbedoFn,
     eval_batch: Option<abi::EvalBatchFn>,
+    /// Each float parameter at its minimum and at its maximum, for the harness.
+    verify_cases: &'static [VerifyCase],
     sanitized: AtomicU64,
 }
 
@@ -210,7 +212,7 @@ impl PluginLobe {
             return Err(Error::new(
                 Status::PluginBlockSize,
                 format!(
-                    "{name}: block_size {} and block_align {} must be {} and 4 (the table's {floats} floats)",
+                    "{name}: block_size {} and block_align {} must be {} and 4 (the table declares {floats} floats)",
                     d.block_size,
                     d.block_align,
                     4 * floats
@@ -236,6 +238,7 @@ impl PluginLobe {
             sample,
             albedo,
             eval_batch: d.eval_batch,
+            verify_cases: corner_cases(params),
             sanitized: AtomicU64::new(0),
         })
     }
@@ -352,6 +355,22 @@ fn param_table(d: &abi::LobeV1) -> Result<&'static [ParamSpec], Error> {
     Ok(Box::leak(specs.into_boxed_slice()))
 }
 
+/// Verification cases for a plugin lobe type (which cannot declare its own in ABI V1):
+/// every float parameter with a range, alone at its minimum and at its maximum.
+fn corner_cases(params: &[ParamSpec]) -> &'static [VerifyCase] {
+    let cases: Vec<VerifyCase> = params
+        .iter()
+        .filter(|p| p.kind == ParamKind::Float && p.min < p.max)
+        .flat_map(|p| {
+            [("min", p.min), ("max", p.max)].map(|(end, v)| VerifyCase {
+                name: Box::leak(format!("{} {end}", p.name).into_boxed_str()),
+                set: Box::leak(vec![(p.name, v)].into_boxed_slice()),
+            })
+        })
+        .collect();
+    Box::leak(cases.into_boxed_slice())
+}
+
 fn transport(mode: Transport) -> u32 {
     match mode {
         Transport::Radiance => 0,
@@ -456,6 +475,10 @@ impl LobeType for PluginLobe {
 
     fn albedo_tolerance(&self, _params: &[f32]) -> f32 {
         PLUGIN_ALBEDO_TOLERANCE
+    }
+
+    fn verify_cases(&self) -> &[VerifyCase] {
+        self.verify_cases
     }
 
     fn sanitized_count(&self) -> u64 {

@@ -230,6 +230,7 @@ impl Rng {
 /// caller's [`Report`] to decide, since it depends on the number of tests in the run).
 pub fn verify_lobe(lobe: &'static dyn LobeType, tier: Tier) -> LobeReport {
     let budget = tier.budget();
+    let sanitized_before = lobe.sanitized_count();
     let mut rng = Rng::new(0x6c69_6e74 ^ lobe.name().len() as u64);
     let sets = param_sets(lobe);
     let cases = sets
@@ -242,6 +243,7 @@ pub fn verify_lobe(lobe: &'static dyn LobeType, tier: Tier) -> LobeReport {
         reciprocal: lobe.reciprocal(),
         cases,
         hard,
+        sanitized: lobe.sanitized_count() - sanitized_before,
     }
 }
 

@@ -187,6 +187,8 @@ pub struct LobeReport {
     pub reciprocal: bool,
     pub cases: Vec<CaseReport>,
     pub hard: HardReport,
+    /// Outputs the lobe type had to have zeroed during the run (`LobeType::sanitized_count`).
+    pub sanitized: u64,
 }
 
 /// A whole run.
@@ -225,6 +227,12 @@ impl Report {
                 for f in c.failures(self.alpha_per_test) {
                     out.push(format!("{} / {}: {f}", l.lobe, c.case));
                 }
+            }
+            if l.sanitized > 0 {
+                out.push(format!(
+                    "{}: {} outputs were NaN, infinite or negative and had to be zeroed",
+                    l.lobe, l.sanitized
+                ));
             }
             if l.hard.failures > 0 {
                 out.push(format!(
@@ -290,11 +298,11 @@ impl Report {
                 );
             }
         }
-        s += "\n| lobe | hard-case evaluations | failures |\n| --- | --- | --- |\n";
+        s += "\n| lobe | hard-case evaluations | failures | sanitized outputs |\n| --- | --- | --- | --- |\n";
         for l in &self.lobes {
             s += &format!(
-                "| {} | {} | {} |\n",
-                l.lobe, l.hard.evaluations, l.hard.failures
+                "| {} | {} | {} | {} |\n",
+                l.lobe, l.hard.evaluations, l.hard.failures, l.sanitized
             );
         }
         let failures = self.failures();
@@ -319,6 +327,7 @@ impl Report {
                 "hard_case_evaluations": l.hard.evaluations,
                 "hard_case_failures": l.hard.failures,
                 "hard_case_first_failure": l.hard.first_failure,
+                "sanitized_outputs": l.sanitized,
                 "cases": l.cases.iter().map(|c| json!({
                     "case": c.case,
                     "chi2": c.chi2.iter().map(|r| json!({
