@@ -1,6 +1,14 @@
-/* include/glint.h compiles alone as strict C99 with -Wall -Wextra -Wpedantic -Werror
- * (being built is the test); running it checks that the declarations link. */
+/* include/glint.h and include/glint_plugin.h compile as strict C99 with -Wall -Wextra
+ * -Wpedantic -Werror, together (being built is the test); running it checks that the
+ * declarations link. */
 #include "glint.h"
+#include "glint_plugin.h"
+
+/* The plugin ABI's flag values are glint.h's. */
+typedef char flags_agree[(GLINT_PLUGIN_FLAG_SPECULAR == GLINT_FLAG_SPECULAR &&
+                          GLINT_PLUGIN_FLAG_TRANSMISSION == GLINT_FLAG_TRANSMISSION)
+                             ? 1
+                             : -1];
 
 int main(void)
 {

@@ -1,11 +1,14 @@
-// include/glint.h compiles alone as C++17 with -Wall -Wextra -Wpedantic -Werror
-// (being built is the test); running it checks the extern "C" linkage.
+// include/glint.h and include/glint_plugin.h compile as C++17 with -Wall -Wextra
+// -Wpedantic -Werror (being built is the test); running it checks the extern "C" linkage.
 #include "glint.h"
+#include "glint_plugin.h"
 
 #include <type_traits>
 
 static_assert(std::is_standard_layout<glint_sample_result>::value, "C layout");
 static_assert(std::is_trivially_copyable<glint_eval_batch_args>::value, "C layout");
+static_assert(std::is_standard_layout<glint_plugin_lobe_v1>::value, "C layout");
+static_assert(GLINT_PLUGIN_FLAG_GLOSSY == GLINT_FLAG_GLOSSY, "one set of flag values");
 
 int main()
 {
