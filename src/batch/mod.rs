@@ -588,58 +588,72 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         // hold the weight), then written back row by row.
         let lobe_flags = lobe.flags();
         let n = group.lanes.len();
-        let [wr, wg, wb] = rows3(&mut s.u, len);
-        let sample_flags = grow(&mut s.flags, len);
-        let lobe_index = grow(&mut s.lobe_index, len);
-        let [vr, vg, vb] = &mut s.value;
-        let [xr, xg, xb] = &mut s.wi;
         if !mixture {
-            for (v, sv) in [&mut *vr, &mut *vg, &mut *vb]
-                .into_iter()
-                .zip(&s.sample_value)
-            {
+            for (v, sv) in s.value.iter_mut().zip(&s.sample_value) {
                 v[..n].copy_from_slice(&sv[..n]);
             }
             s.pdf[..n].copy_from_slice(&s.sample_pdf[..n]);
         }
-        for j in 0..n {
-            let events = s.events[j];
-            let delta = events & EVENT_DELTA != 0;
-            if delta && mixture {
+        let events = &s.events[..n];
+        let [vr, vg, vb] = &mut s.value;
+        let (vr, vg, vb) = (&mut vr[..n], &mut vg[..n], &mut vb[..n]);
+        let pdf = &mut s.pdf[..n];
+        if mixture {
+            // Delta samples are not in the mixture eval: the chosen lobe's own value,
+            // and its discrete probability times the lobe's selection probability.
+            for j in (0..n).filter(|&j| events[j] & EVENT_DELTA != 0) {
                 let lane = group.lanes[j] as usize;
                 let c = input.closures.closure(lane).expect("resolved before");
-                vr[j] = s.sample_value[0][j];
-                vg[j] = s.sample_value[1][j];
-                vb[j] = s.sample_value[2][j];
-                s.pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
-            }
-            let pdf = s.pdf[j];
-            let ok = s.failed[j] == 0 && events & EVENT_VALID != 0 && pdf > 0.0 && pdf.is_finite();
-            if ok {
-                (wr[j], wg[j], wb[j]) = (vr[j] / pdf, vg[j] / pdf, vb[j] / pdf);
-                let side = if events & EVENT_TRANSMITTED != 0 {
-                    flags::TRANSMISSION
-                } else {
-                    flags::REFLECTION
-                };
-                let class = if delta {
-                    flags::SPECULAR
-                } else {
-                    lobe_flags & (flags::DIFFUSE | flags::GLOSSY)
-                };
-                sample_flags[j] = side | class;
-                lobe_index[j] = k as u32;
-            } else {
-                (wr[j], wg[j], wb[j]) = (0.0, 0.0, 0.0);
-                (vr[j], vg[j], vb[j]) = (0.0, 0.0, 0.0);
-                (xr[j], xg[j], xb[j]) = (0.0, 0.0, 0.0);
-                s.pdf[j] = 0.0;
-                sample_flags[j] = 0;
-                lobe_index[j] = 0;
-                s.eta[j] = 1.0;
-                s.roughness[j] = 0.0;
+                (vr[j], vg[j], vb[j]) = (
+                    s.sample_value[0][j],
+                    s.sample_value[1][j],
+                    s.sample_value[2][j],
+                );
+                pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
             }
         }
+        let [wr, wg, wb] = rows3(&mut s.u, len);
+        let (wr, wg, wb) = (&mut wr[..n], &mut wg[..n], &mut wb[..n]);
+        let sample_flags = &mut grow(&mut s.flags, len)[..n];
+        let lobe_index = &mut grow(&mut s.lobe_index, len)[..n];
+        let failed = &s.failed[..n];
+        let class = lobe_flags & (flags::DIFFUSE | flags::GLOSSY);
+        let mut any_bad = false;
+        for j in 0..n {
+            let e = events[j];
+            let ok = failed[j] == 0 && e & EVENT_VALID != 0 && pdf[j] > 0.0 && pdf[j].is_finite();
+            any_bad |= !ok;
+            let inv = if ok { 1.0 / pdf[j] } else { 0.0 };
+            (wr[j], wg[j], wb[j]) = (vr[j] * inv, vg[j] * inv, vb[j] * inv);
+            let side = if e & EVENT_TRANSMITTED != 0 {
+                flags::TRANSMISSION
+            } else {
+                flags::REFLECTION
+            };
+            let class = if e & EVENT_DELTA != 0 {
+                flags::SPECULAR
+            } else {
+                class
+            };
+            sample_flags[j] = if ok { side | class } else { 0 };
+            lobe_index[j] = if ok { k as u32 } else { 0 };
+        }
+        if any_bad {
+            // Failed samples read as all zero (eta 1), as `FAILED`.
+            for j in 0..n {
+                if sample_flags[j] == 0 {
+                    (wr[j], wg[j], wb[j]) = (0.0, 0.0, 0.0);
+                    (vr[j], vg[j], vb[j]) = (0.0, 0.0, 0.0);
+                    for row in s.wi.iter_mut() {
+                        row[j] = 0.0;
+                    }
+                    pdf[j] = 0.0;
+                    s.eta[j] = 1.0;
+                    s.roughness[j] = 0.0;
+                }
+            }
+        }
+        let (sample_flags, lobe_index) = (&s.flags, &s.lobe_index);
         let scatter = Scatter::new(&group.lanes, start, &s.failed, false);
         scatter.rows(&s.wi, [&mut *out.wi.x, &mut *out.wi.y, &mut *out.wi.z]);
         scatter.row(&s.pdf, out.pdf);
