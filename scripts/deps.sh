@@ -3,7 +3,10 @@
 # Sourced by scripts/run.sh and scripts/test.sh.
 set -euo pipefail
 
-packages=(cmake pkg-config gcc g++ make libcmocka-dev)
+# libembree-dev, libopenimageio-dev, libassimp-dev, libcjson-dev: examples/pathtracer
+# (Embree 3 geometry, EXR/PNG output, meshes and scene files).
+packages=(cmake pkg-config gcc g++ make libcmocka-dev
+          libembree-dev libopenimageio-dev libassimp-dev libcjson-dev)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

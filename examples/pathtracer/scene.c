@@ -1,0 +1,443 @@
+/* scene.c: scene containers, Embree setup, the environment, named materials and the
+ * built-in scenes (the material showcase and the white furnace). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pt.h"
+
+/* ---- named materials ------------------------------------------------------------------ */
+
+typedef struct named_material {
+    const char *name;
+    const char *json;
+} named_material;
+
+static const named_material MATERIALS[] = {
+    /* The white furnace's reference: albedo exactly 1. */
+    {"white", "{\"lobes\":[{\"type\":\"lambert\",\"weight\":1,\"color\":[1,1,1]}]}"},
+    {"clay", "{\"lobes\":[{\"type\":\"lambert\",\"color\":[0.70,0.26,0.13]}]}"},
+    {"gold", "{\"lobes\":[{\"type\":\"conductor\",\"roughness\":0.3,\"fresnel\":\"artistic\","
+             "\"reflectivity\":[1.0,0.77,0.33],\"edge_tint\":[1.0,0.96,0.78]}]}"},
+    {"aluminium", "{\"lobes\":[{\"type\":\"conductor\",\"roughness\":0.5,\"fresnel\":"
+                  "\"conductor\",\"eta\":[1.66,0.88,0.52],\"k\":[9.22,6.27,4.84]}]}"},
+    {"rough_glass", "{\"lobes\":[{\"type\":\"dielectric\",\"roughness\":0.3,\"eta\":1.5}]}"},
+    {"glass", "{\"lobes\":[{\"type\":\"dielectric\",\"roughness\":0,\"eta\":1.5}]}"},
+    {"mirror", "{\"lobes\":[{\"type\":\"mirror\",\"fresnel\":\"schlick\",\"f0\":[0.96,0.96,0.96],"
+               "\"f90\":1}]}"},
+    /* Layered-looking: a blue diffuse base under a glossy silver coat, as one mix. */
+    {"coated", "{\"lobes\":[{\"type\":\"lambert\",\"weight\":0.75,\"color\":[0.06,0.22,0.75]},"
+               "{\"type\":\"conductor\",\"weight\":0.25,\"roughness\":0.15,\"fresnel\":\"schlick\","
+               "\"f0\":[1,1,1],\"f90\":[1,1,1]}]}"},
+    /* Velvet: dark diffuse base plus the Charlie sheen plugin (needs glint_charlie.so). */
+    {"sheen", "{\"lobes\":[{\"type\":\"lambert\",\"weight\":0.85,\"color\":[0.16,0.01,0.05]},"
+              "{\"type\":\"charlie\",\"weight\":1,\"color\":[1.0,0.75,0.85],\"roughness\":0.3}]}"},
+    /* For the furnace tests: the whitest versions (albedo as close to 1 as each model gets). */
+    {"white_conductor", "{\"lobes\":[{\"type\":\"conductor\",\"roughness\":0.6,\"fresnel\":"
+                        "\"schlick\",\"f0\":1,\"f90\":1}]}"},
+    {"white_mirror", "{\"lobes\":[{\"type\":\"mirror\"}]}"},
+    {"white_mix", "{\"lobes\":[{\"type\":\"lambert\",\"weight\":0.5,\"color\":[1,1,1]},"
+                  "{\"type\":\"conductor\",\"weight\":0.5,\"roughness\":0.2,"
+                  "\"fresnel\":\"schlick\",\"f0\":1,\"f90\":1}]}"},
+    {"white_sheen", "{\"lobes\":[{\"type\":\"lambert\",\"weight\":0.6,\"color\":[1,1,1]},"
+                    "{\"type\":\"charlie\",\"weight\":0.4,\"color\":[1,1,1],\"roughness\":0.3}]}"},
+    {"ground_light", "{\"lobes\":[{\"type\":\"lambert\",\"color\":[0.50,0.50,0.48]}]}"},
+    {"ground_dark", "{\"lobes\":[{\"type\":\"lambert\",\"color\":[0.22,0.22,0.23]}]}"},
+};
+
+const char *material_by_name(const char *name)
+{
+    size_t i;
+    for (i = 0; i < sizeof MATERIALS / sizeof MATERIALS[0]; i++)
+        if (strcmp(MATERIALS[i].name, name) == 0)
+            return MATERIALS[i].json;
+    return NULL;
+}
+
+void material_list(void)
+{
+    size_t i;
+    for (i = 0; i < sizeof MATERIALS / sizeof MATERIALS[0]; i++)
+        fprintf(stderr, "  %-16s %s\n", MATERIALS[i].name, MATERIALS[i].json);
+}
+
+/* ---- containers ----------------------------------------------------------------------- */
+
+static void *grow(void *array, int *cap, int count, size_t elem)
+{
+    if (count < *cap)
+        return array;
+    *cap = *cap ? *cap * 2 : 8;
+    array = realloc(array, (size_t)*cap * elem);
+    if (!array) {
+        fprintf(stderr, "pathtracer: out of memory\n");
+        exit(EXIT_FAILURE);
+    }
+    return array;
+}
+
+static void *xmalloc(size_t n)
+{
+    void *p = malloc(n ? n : 1);
+    if (!p) {
+        fprintf(stderr, "pathtracer: out of memory\n");
+        exit(EXIT_FAILURE);
+    }
+    return p;
+}
+
+void scene_init(pt_scene *s)
+{
+    memset(s, 0, sizeof *s);
+    s->camera.eye = v3(0, 0, 5);
+    s->camera.target = v3(0, 0, 0);
+    s->camera.up = v3(0, 1, 0);
+    s->camera.vfov_deg = 40.0f;
+    s->env.kind = ENV_NONE;
+    s->env.intensity = 1.0f;
+}
+
+void scene_free(pt_scene *s)
+{
+    int i;
+    for (i = 0; i < s->material_count; i++) {
+        free(s->materials[i].json);
+        material_free_blocks(&s->materials[i]);
+    }
+    for (i = 0; i < s->object_count; i++) {
+        free(s->objects[i].positions);
+        free(s->objects[i].normals);
+        free(s->objects[i].indices);
+    }
+    free(s->materials);
+    free(s->objects);
+    free(s->lights);
+    if (s->rtc)
+        rtcReleaseScene(s->rtc);
+    if (s->device)
+        rtcReleaseDevice(s->device);
+    memset(s, 0, sizeof *s);
+}
+
+int scene_add_material(pt_scene *s, const char *name, const char *json)
+{
+    pt_material *m;
+    size_t n = strlen(json);
+    s->materials = grow(s->materials, &s->material_cap, s->material_count, sizeof *m);
+    m = &s->materials[s->material_count];
+    memset(m, 0, sizeof *m);
+    snprintf(m->name, sizeof m->name, "%s", name);
+    m->json = xmalloc(n + 1);
+    memcpy(m->json, json, n + 1);
+    return s->material_count++;
+}
+
+int scene_find_material(const pt_scene *s, const char *name)
+{
+    int i;
+    for (i = 0; i < s->material_count; i++)
+        if (strcmp(s->materials[i].name, name) == 0)
+            return i;
+    return -1;
+}
+
+static pt_object *new_object(pt_scene *s, int kind, int material)
+{
+    pt_object *o;
+    s->objects = grow(s->objects, &s->object_cap, s->object_count, sizeof *o);
+    o = &s->objects[s->object_count++];
+    memset(o, 0, sizeof *o);
+    o->kind = kind;
+    o->material = material;
+    o->material2 = -1;
+    o->checker_scale = 1.0f;
+    o->light = -1;
+    return o;
+}
+
+void scene_add_sphere(pt_scene *s, vec3 center, float radius, int material)
+{
+    pt_object *o = new_object(s, OBJ_SPHERE, material);
+    o->center = center;
+    o->radius = radius;
+}
+
+static void quad_mesh(pt_object *o, vec3 c, vec3 e1, vec3 e2)
+{
+    const vec3 p[4] = {c, v_add(c, e1), v_add(v_add(c, e1), e2), v_add(c, e2)};
+    static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    int i;
+    o->vertex_count = 4;
+    o->triangle_count = 2;
+    o->positions = xmalloc(12 * sizeof(float));
+    o->indices = xmalloc(6 * sizeof(uint32_t));
+    for (i = 0; i < 4; i++) {
+        o->positions[3 * i + 0] = p[i].x;
+        o->positions[3 * i + 1] = p[i].y;
+        o->positions[3 * i + 2] = p[i].z;
+    }
+    memcpy(o->indices, idx, sizeof idx);
+}
+
+void scene_add_quad(pt_scene *s, vec3 corner, vec3 e1, vec3 e2, int material)
+{
+    quad_mesh(new_object(s, OBJ_MESH, material), corner, e1, e2);
+}
+
+void scene_add_mesh(pt_scene *s, float *positions, float *normals, size_t vertex_count,
+                    uint32_t *indices, size_t triangle_count, int material)
+{
+    pt_object *o = new_object(s, OBJ_MESH, material);
+    o->positions = positions;
+    o->normals = normals;
+    o->vertex_count = vertex_count;
+    o->indices = indices;
+    o->triangle_count = triangle_count;
+}
+
+void scene_add_quad_light(pt_scene *s, vec3 corner, vec3 e1, vec3 e2, vec3 radiance)
+{
+    pt_quad_light *l;
+    pt_object *o;
+    const vec3 n = v_cross(e1, e2);
+    s->lights = grow(s->lights, &s->light_cap, s->light_count, sizeof *l);
+    l = &s->lights[s->light_count];
+    memset(l, 0, sizeof *l);
+    l->corner = corner;
+    l->e1 = e1;
+    l->e2 = e2;
+    l->area = v_len(n);
+    l->normal = v_norm(n);
+    l->radiance = radiance;
+    o = new_object(s, OBJ_LIGHT, -1);
+    o->light = s->light_count++;
+    quad_mesh(o, corner, e1, e2);
+}
+
+/* ---- build ----------------------------------------------------------------------------- */
+
+static void embree_error(void *user, enum RTCError code, const char *message)
+{
+    (void)user;
+    fprintf(stderr, "pathtracer: embree error %d: %s\n", (int)code, message);
+}
+
+static int check_materials(pt_scene *s, const glint_runtime *rt)
+{
+    glint_arena *arena = NULL;
+    int i, ok = 1;
+    if (glint_arena_create(1, &arena) != GLINT_OK) {
+        fprintf(stderr, "pathtracer: glint_arena_create: %s\n", glint_last_error());
+        return -1;
+    }
+    for (i = 0; i < s->material_count && ok; i++) {
+        pt_material *m = &s->materials[i];
+        glint_closure *c = NULL;
+        uint32_t n = 0, k;
+        glint_arena_reset(arena);
+        if (glint_closure_from_json(rt, arena, m->json, NULL, &c) != GLINT_OK ||
+            glint_closure_lobe_count(c, &n) != GLINT_OK) {
+            fprintf(stderr, "pathtracer: material \"%s\": %s\n", m->name, glint_last_error());
+            ok = 0;
+            break;
+        }
+        m->transmits = 0;
+        for (k = 0; k < n; k++) {
+            uint32_t type = 0;
+            float prob = 0.0f;
+            glint_lobe_info info;
+            memset(&info, 0, sizeof info);
+            info.struct_size = sizeof info;
+            if (glint_closure_lobe(c, k, &type, &prob) != GLINT_OK ||
+                glint_lobe_type_info(rt, type, &info) != GLINT_OK) {
+                fprintf(stderr, "pathtracer: material \"%s\": %s\n", m->name, glint_last_error());
+                ok = 0;
+                break;
+            }
+            if (info.flags & GLINT_FLAG_TRANSMISSION)
+                m->transmits = 1;
+        }
+    }
+    glint_arena_destroy(arena);
+    return ok ? 0 : -1;
+}
+
+int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
+{
+    int i;
+    float total = 0.0f, run = 0.0f;
+    if (check_materials(s, rt) != 0)
+        return -1;
+    for (i = 0; decode_blocks && i < s->material_count; i++)
+        if (material_decode(&s->materials[i], rt) != 0)
+            return -1;
+    for (i = 0; i < s->object_count; i++) {
+        const pt_object *o = &s->objects[i];
+        if (o->kind != OBJ_LIGHT &&
+            (o->material < 0 || o->material >= s->material_count ||
+             o->material2 >= s->material_count)) {
+            fprintf(stderr, "pathtracer: object %d has no valid material\n", i);
+            return -1;
+        }
+    }
+    /* Lights are picked in proportion to their power (luminance x area). */
+    for (i = 0; i < s->light_count; i++)
+        total += v_luminance(s->lights[i].radiance) * s->lights[i].area;
+    for (i = 0; i < s->light_count; i++) {
+        pt_quad_light *l = &s->lights[i];
+        l->select_prob = total > 0.0f ? v_luminance(l->radiance) * l->area / total
+                                      : 1.0f / (float)s->light_count;
+        run += l->select_prob;
+        l->cdf = i + 1 == s->light_count ? 1.0f : run;
+    }
+
+    s->device = rtcNewDevice(NULL);
+    if (!s->device) {
+        fprintf(stderr, "pathtracer: rtcNewDevice failed (error %d)\n",
+                (int)rtcGetDeviceError(NULL));
+        return -1;
+    }
+    rtcSetDeviceErrorFunction(s->device, embree_error, NULL);
+    s->rtc = rtcNewScene(s->device);
+    rtcSetSceneFlags(s->rtc, RTC_SCENE_FLAG_ROBUST);
+    for (i = 0; i < s->object_count; i++) {
+        const pt_object *o = &s->objects[i];
+        RTCGeometry g;
+        if (o->kind == OBJ_SPHERE) {
+            float *v;
+            g = rtcNewGeometry(s->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+            v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                        4 * sizeof(float), 1);
+            v[0] = o->center.x;
+            v[1] = o->center.y;
+            v[2] = o->center.z;
+            v[3] = o->radius;
+        } else {
+            float *v;
+            uint32_t *idx;
+            g = rtcNewGeometry(s->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                        3 * sizeof(float), o->vertex_count);
+            idx = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                          3 * sizeof(uint32_t), o->triangle_count);
+            memcpy(v, o->positions, o->vertex_count * 3 * sizeof(float));
+            memcpy(idx, o->indices, o->triangle_count * 3 * sizeof(uint32_t));
+        }
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(s->rtc, g, (unsigned)i);
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(s->rtc);
+    if (rtcGetDeviceError(s->device) != RTC_ERROR_NONE) {
+        fprintf(stderr, "pathtracer: building the Embree scene failed\n");
+        return -1;
+    }
+    return 0;
+}
+
+/* ---- environment ---------------------------------------------------------------------- */
+
+static vec3 lerp3(vec3 a, vec3 b, float t) { return v_add(a, v_scale(v_sub(b, a), t)); }
+
+vec3 env_radiance(const pt_env *e, vec3 d)
+{
+    switch (e->kind) {
+    case ENV_UNIFORM:
+        return v_scale(e->color, e->intensity);
+    case ENV_SKY: {
+        const float y = d.y / v_len(d);
+        vec3 c;
+        if (y >= 0.0f)
+            c = lerp3(e->horizon, e->zenith, sqrtf(y));
+        else
+            c = lerp3(e->horizon, e->ground, fminf(1.0f, -y * 8.0f));
+        return v_scale(c, e->intensity);
+    }
+    default:
+        return v3(0, 0, 0);
+    }
+}
+
+float env_pdf(const pt_env *e, vec3 d)
+{
+    const float y = d.y / v_len(d);
+    if (e->kind == ENV_NONE)
+        return 0.0f;
+    return e->up_fraction * fmaxf(y, 0.0f) / PT_PI + (1.0f - e->up_fraction) / (4.0f * PT_PI);
+}
+
+vec3 env_sample(const pt_env *e, float u0, float u1, float u2, float *pdf)
+{
+    vec3 d;
+    if (u0 < e->up_fraction) { /* cosine around +y */
+        const float r = sqrtf(u1), phi = 2.0f * PT_PI * u2;
+        d = v3(r * cosf(phi), sqrtf(fmaxf(0.0f, 1.0f - u1)), r * sinf(phi));
+    } else { /* uniform sphere */
+        const float y = 1.0f - 2.0f * u1, r = sqrtf(fmaxf(0.0f, 1.0f - y * y));
+        const float phi = 2.0f * PT_PI * u2;
+        d = v3(r * cosf(phi), y, r * sinf(phi));
+    }
+    *pdf = env_pdf(e, d);
+    return d;
+}
+
+/* ---- built-in scenes -------------------------------------------------------------------- */
+
+void scene_showcase(pt_scene *s, int with_sheen)
+{
+    /* Two staggered rows: the back row first. */
+    static const char *const names[8] = {"clay",  "aluminium",   "coated", "sheen",
+                                         "gold",  "glass", "rough_glass", "mirror"};
+    static const float xs[8] = {-2.45f, -1.05f, 0.35f, 1.75f, -1.75f, -0.35f, 1.05f, 2.45f};
+    const float radius = 0.6f, row_z = 0.8f;
+    int i;
+    const int light = scene_add_material(s, "ground_light", material_by_name("ground_light"));
+    const int dark = scene_add_material(s, "ground_dark", material_by_name("ground_dark"));
+
+    /* Ground: a large checkerboard. */
+    scene_add_quad(s, v3(-40, 0, 40), v3(80, 0, 0), v3(0, 0, -80), light);
+    s->objects[s->object_count - 1].material2 = dark;
+    s->objects[s->object_count - 1].checker_scale = 1.0f;
+
+    for (i = 0; i < 8; i++) {
+        int m;
+        float x = xs[i];
+        if (i == 3 && !with_sheen)
+            continue;
+        if (i < 3 && !with_sheen)
+            x += 0.7f; /* re-center the back row of three */
+        m = scene_add_material(s, names[i], material_by_name(names[i]));
+        scene_add_sphere(s, v3(x, radius, i < 4 ? -row_z : row_z), radius, m);
+    }
+
+    /* A soft box above, left and in front, emitting downward (e1 x e2 points down). */
+    scene_add_quad_light(s, v3(-5.5f, 5.5f, 0.5f), v3(5.0f, 0, 0), v3(0, 0, 4.0f),
+                         v3(5.8f, 5.5f, 5.1f));
+
+    s->env.kind = ENV_SKY;
+    s->env.zenith = v3(0.22f, 0.38f, 0.80f);
+    s->env.horizon = v3(0.85f, 0.88f, 0.95f);
+    s->env.ground = v3(0.20f, 0.18f, 0.16f);
+    s->env.up_fraction = 0.8f;
+    s->env.intensity = 0.55f;
+
+    s->camera.eye = v3(0.0f, 3.0f, 7.4f);
+    s->camera.target = v3(0.0f, 0.45f, 0.0f);
+    s->camera.up = v3(0, 1, 0);
+    s->camera.vfov_deg = 30.0f;
+}
+
+void scene_furnace(pt_scene *s, const char *material_json)
+{
+    const int m = scene_add_material(s, "furnace", material_json);
+    scene_add_sphere(s, v3(0, 0, 0), 1.0f, m);
+    s->env.kind = ENV_UNIFORM;
+    s->env.color = v3(1, 1, 1);
+    s->env.intensity = 1.0f;
+    s->env.up_fraction = 0.0f; /* uniform on the sphere */
+    s->camera.eye = v3(0, 0, 4.5f);
+    s->camera.target = v3(0, 0, 0);
+    s->camera.up = v3(0, 1, 0);
+    s->camera.vfov_deg = 30.0f;
+}
