@@ -2,17 +2,14 @@
  * closure. See README.md in this directory for the options and the tests. */
 #define _POSIX_C_SOURCE 200809L
 
-#include <errno.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
+#include "host.h"
 #include "image_io.h"
 #include "pt.h"
-
-#define CHARLIE_FILE "glint_charlie.so"
 
 static void usage(FILE *f)
 {
@@ -38,41 +35,12 @@ static void usage(FILE *f)
             "                          of radiance 1\n"
             "  --material M            the furnace sphere's material: a name (see\n"
             "                          --list-materials) or closure JSON (default: white)\n"
+            "  --pixel-center          one camera ray through each pixel's center (no jitter)\n"
             "  --aovs                  add variance.R/G/B (variance of each pixel's mean,\n"
             "                          from its samples) and coverage to the EXR\n"
             "  --quiet                 no progress bar\n"
             "  --no-timing             do not time the Glint calls (no Glint share reported)\n"
             "  --list-materials        print the named materials and exit\n");
-}
-
-static int parse_int(const char *opt, const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    long v;
-    errno = 0;
-    v = strtol(s, &end, 10);
-    if (errno || *end || end == s || v < lo || v > hi) {
-        fprintf(stderr, "pathtracer: %s expects an integer in [%ld, %ld], got \"%s\"\n", opt,
-                lo, hi, s);
-        return -1;
-    }
-    *out = v;
-    return 0;
-}
-
-/* The directory of the running executable (for plugins placed beside it). */
-static int exe_dir(char *buf, size_t len)
-{
-    ssize_t n = readlink("/proc/self/exe", buf, len - 1);
-    char *slash;
-    if (n <= 0)
-        return -1;
-    buf[n] = '\0';
-    slash = strrchr(buf, '/');
-    if (!slash)
-        return -1;
-    *slash = '\0';
-    return 0;
 }
 
 int main(int argc, char **argv)
@@ -81,12 +49,13 @@ int main(int argc, char **argv)
     const char *out = "render", *scene_file = NULL, *plugin = NULL, *material = "white";
     int furnace = 0, aovs = 0, i, have_charlie = 0, status = EXIT_FAILURE;
     glint_runtime *rt = NULL;
-    pt_scene scene;
+    ex_scene scene;
     pt_accum acc;
     pt_stats stats;
     size_t npix;
     static const char *const strategy_names[] = {"mis", "bsdf", "light"};
 
+    scene_program = "pathtracer";
     memset(&set, 0, sizeof set);
     memset(&acc, 0, sizeof acc);
     set.width = 640;
@@ -114,7 +83,7 @@ int main(int argc, char **argv)
 #define INT_OPT(name, lo, hi, field)                                                         \
     if (strcmp(a, name) == 0) {                                                              \
         NEED_VALUE;                                                                          \
-        if (parse_int(a, v, lo, hi, &n) != 0)                                                \
+        if (host_parse_int(a, v, lo, hi, &n) != 0)                                                \
             return EXIT_FAILURE;                                                             \
         field = (int)n;                                                                      \
         continue;                                                                            \
@@ -127,7 +96,7 @@ int main(int argc, char **argv)
         INT_OPT("--threads", 1, 256, set.threads)
         if (strcmp(a, "--seed") == 0) {
             NEED_VALUE;
-            if (parse_int(a, v, 0, LONG_MAX, &n) != 0)
+            if (host_parse_int(a, v, 0, LONG_MAX, &n) != 0)
                 return EXIT_FAILURE;
             set.seed = (uint64_t)n;
         } else if (strcmp(a, "--out") == 0) {
@@ -168,6 +137,8 @@ int main(int argc, char **argv)
             }
         } else if (strcmp(a, "--furnace") == 0) {
             furnace = 1;
+        } else if (strcmp(a, "--pixel-center") == 0) {
+            set.pixel_center = 1;
         } else if (strcmp(a, "--aovs") == 0) {
             aovs = 1;
         } else if (strcmp(a, "--no-timing") == 0) {
@@ -197,43 +168,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "pathtracer: glint_runtime_create: %s\n", glint_last_error());
         return EXIT_FAILURE;
     }
-    if (plugin) {
-        if (glint_runtime_load_plugin(rt, plugin) != GLINT_OK) {
-            fprintf(stderr, "pathtracer: %s\n", glint_last_error());
-            glint_runtime_destroy(rt);
-            return EXIT_FAILURE;
-        }
-    } else {
-        char dir[PATH_MAX], path[PATH_MAX + 32];
-        if (exe_dir(dir, sizeof dir) == 0) {
-            snprintf(path, sizeof path, "%s/%s", dir, CHARLIE_FILE);
-            if (access(path, R_OK) == 0 && glint_runtime_load_plugin(rt, path) != GLINT_OK)
-                fprintf(stderr, "pathtracer: warning: %s\n", glint_last_error());
-        }
-    }
-    {
-        uint32_t id;
-        have_charlie = glint_lobe_type_find(rt, "charlie", &id) == GLINT_OK;
-    }
-
+    have_charlie = host_load_plugins(rt, plugin);
     scene_init(&scene);
-    if (scene_file) {
-        if (scene_load_file(&scene, scene_file) != 0)
-            goto done;
-    } else if (furnace) {
-        const char *json = material[0] == '{' ? material : material_by_name(material);
-        if (!json) {
-            fprintf(stderr, "pathtracer: unknown material \"%s\"; the named ones:\n", material);
-            material_list();
-            goto done;
-        }
-        scene_furnace(&scene, json);
-    } else {
-        if (!have_charlie)
-            fprintf(stderr, "pathtracer: no charlie lobe (plugin " CHARLIE_FILE
-                            " not found, see --plugin): the sheen sphere is left out\n");
-        scene_showcase(&scene, have_charlie);
-    }
+    if (have_charlie < 0 ||
+        host_pick_scene(&scene, scene_file, furnace, material, have_charlie) != 0)
+        goto done;
     if (scene_build(&scene, rt, set.closures == CLOSURES_BLOCKS) != 0)
         goto done;
 

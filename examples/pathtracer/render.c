@@ -23,16 +23,14 @@
 #define TILE 16
 
 typedef struct shared {
-    const pt_scene *scene;
+    const ex_scene *scene;
     const glint_runtime *rt;
     const pt_settings *set;
     pt_accum *acc;
     int tiles_x, tiles_y, tile_count;
     atomic_int next_tile;
     atomic_int tiles_done;
-    /* camera */
-    vec3 eye, forward, right, up;
-    float tan_half, aspect;
+    ex_view view;
 } shared;
 
 typedef struct worker {
@@ -98,63 +96,6 @@ static void record_error(worker *w, const char *what, glint_status st)
 
 /* ---- rays ------------------------------------------------------------------------------ */
 
-typedef struct hit {
-    float t, u, v;
-    unsigned geom, prim;
-} hit;
-
-static int intersect(worker *w, vec3 o, vec3 d, hit *h)
-{
-    struct RTCRayHit rh;
-    memset(&rh, 0, sizeof rh);
-    rh.ray.org_x = o.x;
-    rh.ray.org_y = o.y;
-    rh.ray.org_z = o.z;
-    rh.ray.dir_x = d.x;
-    rh.ray.dir_y = d.y;
-    rh.ray.dir_z = d.z;
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = INFINITY;
-    rh.ray.mask = 0xffffffffu;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(w->sh->scene->rtc, &w->ictx, &rh);
-    w->rays++;
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
-        return 0;
-    h->t = rh.ray.tfar;
-    h->u = rh.hit.u;
-    h->v = rh.hit.v;
-    h->geom = rh.hit.geomID;
-    h->prim = rh.hit.primID;
-    return 1;
-}
-
-static int occluded(worker *w, vec3 o, vec3 d, float tfar)
-{
-    struct RTCRay r;
-    memset(&r, 0, sizeof r);
-    r.org_x = o.x;
-    r.org_y = o.y;
-    r.org_z = o.z;
-    r.dir_x = d.x;
-    r.dir_y = d.y;
-    r.dir_z = d.z;
-    r.tnear = 0.0f;
-    r.tfar = tfar;
-    r.mask = 0xffffffffu;
-    rtcOccluded1(w->sh->scene->rtc, &w->ictx, &r);
-    w->rays++;
-    return r.tfar < 0.0f; /* set to -inf on a hit */
-}
-
-/* Move a surface point off the surface, to the side of `dir`. */
-static vec3 offset_point(vec3 p, vec3 ng, vec3 dir)
-{
-    const float eps = 2e-4f * (1.0f + v_max_abs(p));
-    return v_madd(p, ng, v_dot(dir, ng) > 0.0f ? eps : -eps);
-}
-
 static float power_heuristic(float a, float b)
 {
     if (isinf(a))
@@ -164,58 +105,10 @@ static float power_heuristic(float a, float b)
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
-/* ---- surfaces -------------------------------------------------------------------------- */
-
-typedef struct surface {
-    vec3 p, ng, ns, tangent;
-    int material;
-} surface;
-
-static void surface_at(const pt_scene *s, const hit *h, vec3 o, vec3 d, surface *out)
-{
-    const pt_object *obj = &s->objects[h->geom];
-    out->p = v_madd(o, d, h->t);
-    if (obj->kind == OBJ_SPHERE) {
-        const vec3 n = v_norm(v_sub(out->p, obj->center));
-        out->p = v_madd(obj->center, n, obj->radius); /* back onto the sphere */
-        out->ng = out->ns = n;
-    } else {
-        const uint32_t *tri = &obj->indices[3 * (size_t)h->prim];
-        const float *P = obj->positions;
-        const vec3 p0 = v3(P[3 * tri[0]], P[3 * tri[0] + 1], P[3 * tri[0] + 2]);
-        const vec3 p1 = v3(P[3 * tri[1]], P[3 * tri[1] + 1], P[3 * tri[1] + 2]);
-        const vec3 p2 = v3(P[3 * tri[2]], P[3 * tri[2] + 1], P[3 * tri[2] + 2]);
-        out->ng = v_norm(v_cross(v_sub(p1, p0), v_sub(p2, p0)));
-        out->ns = out->ng;
-        if (obj->normals) {
-            const float *N = obj->normals;
-            const float b0 = 1.0f - h->u - h->v;
-            vec3 n = v3(0, 0, 0);
-            int k;
-            for (k = 0; k < 3; k++) {
-                const float b = k == 0 ? b0 : k == 1 ? h->u : h->v;
-                n = v_madd(n, v3(N[3 * tri[k]], N[3 * tri[k] + 1], N[3 * tri[k] + 2]), b);
-            }
-            if (v_dot(n, n) > 0.0f) {
-                n = v_norm(n);
-                /* Keep the interpolated normal on the geometric normal's side. */
-                out->ns = v_dot(n, out->ng) > 0.0f ? n : v_neg(n);
-            }
-        }
-    }
-    out->material = obj->material;
-    if (obj->material2 >= 0) {
-        const float sc = obj->checker_scale;
-        const long cx = (long)floorf(out->p.x / sc), cz = (long)floorf(out->p.z / sc);
-        if ((cx + cz) & 1)
-            out->material = obj->material2;
-    }
-}
-
 /* ---- lights ---------------------------------------------------------------------------- */
 
 /* Pick a quad light for next-event estimation; returns its index or -1. */
-static int pick_light(const pt_scene *s, float u)
+static int pick_light(const ex_scene *s, float u)
 {
     int i;
     for (i = 0; i < s->light_count; i++)
@@ -226,7 +119,7 @@ static int pick_light(const pt_scene *s, float u)
 
 /* Solid-angle pdf of next-event estimation choosing the point `p` on light `l` from `ref`
  * (with the light's selection probability), 0 for the back side. */
-static float light_pdf(const pt_quad_light *l, vec3 ref, vec3 p)
+static float light_pdf(const ex_quad_light *l, vec3 ref, vec3 p)
 {
     const vec3 to = v_sub(p, ref);
     const float d2 = v_dot(to, to);
@@ -238,15 +131,31 @@ static float light_pdf(const pt_quad_light *l, vec3 ref, vec3 p)
 
 /* ---- the path -------------------------------------------------------------------------- */
 
-/* Is `wi` on the same side of the geometric normal as of the shading normal? With
- * interpolated normals (meshes) they can disagree near silhouettes; such directions would
- * leak light through the surface, so they are dropped. Always true on spheres and quads. */
-static int side_ok(vec3 wi, vec3 ng, vec3 ns)
+/* f(wo, wi) |cos| of the closure toward a light, or 0 when the shadow ray o + t d,
+ * t < len, is blocked (or the evaluation fails); *pdf is the closure's pdf of wi. */
+static vec3 unoccluded_f(worker *w, const glint_closure *closure, const ex_surface *sf, vec3 wi,
+                         vec3 o, vec3 d, float len, float *pdf)
 {
-    return (v_dot(wi, ng) > 0.0f) == (v_dot(wi, ns) > 0.0f);
+    glint_eval_result e;
+    glint_status st;
+    memset(&e, 0, sizeof e);
+    e.struct_size = sizeof e;
+    *pdf = 0.0f;
+    GLINT_TIMED(w, GLINT_EVAL, st, glint_eval(closure, sf->wo_local, frame_to_local(&sf->fr, wi), &e));
+    if (st != GLINT_OK) {
+        record_error(w, "glint_eval", st);
+        return v3(0, 0, 0);
+    }
+    if (!(e.value[0] + e.value[1] + e.value[2] > 0.0f))
+        return v3(0, 0, 0);
+    w->rays++;
+    if (scene_occluded(w->sh->scene, &w->ictx, o, d, len))
+        return v3(0, 0, 0);
+    *pdf = e.pdf;
+    return v3(e.value[0], e.value[1], e.value[2]);
 }
 
-static glint_status build_closure(worker *w, const pt_material *mat, const glint_vec3 *wo,
+static glint_status build_closure(worker *w, const ex_material *mat, const glint_vec3 *wo,
                                   glint_closure **out)
 {
     const glint_status st = glint_arena_reset(w->arena);
@@ -259,7 +168,7 @@ static glint_status build_closure(worker *w, const pt_material *mat, const glint
 
 static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
 {
-    const pt_scene *s = w->sh->scene;
+    const ex_scene *s = w->sh->scene;
     const pt_settings *set = w->sh->set;
     const int use_nee = set->strategy != STRATEGY_BSDF;
     const int mis = set->strategy == STRATEGY_MIS;
@@ -273,15 +182,14 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
     vec3 prev_p = o;
 
     for (depth = 0;; depth++) {
-        hit h;
-        surface sf;
-        const pt_material *mat;
+        ex_hit h;
+        ex_surface sf;
         glint_closure *closure = NULL;
         glint_status st;
-        frame fr;
-        vec3 wo, wo_l;
+        int i;
 
-        if (!intersect(w, o, d, &h)) {
+        w->rays++;
+        if (!scene_intersect(s, &w->ictx, o, d, &h)) {
             const vec3 le = env_radiance(&s->env, d);
             float weight = 1.0f;
             if (!specular && s->env.kind != ENV_NONE)
@@ -293,7 +201,7 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
         if (depth == 0)
             *primary_hit = 1;
         if (s->objects[h.geom].kind == OBJ_LIGHT) {
-            const pt_quad_light *l = &s->lights[s->objects[h.geom].light];
+            const ex_quad_light *l = &s->lights[s->objects[h.geom].light];
             if (v_dot(d, l->normal) < 0.0f) { /* the emitting side */
                 float weight = 1.0f;
                 if (!specular) {
@@ -309,19 +217,9 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
             break;
 
         surface_at(s, &h, o, d, &sf);
-        mat = &s->materials[sf.material];
-        wo = v_neg(d);
-        if (!mat->transmits && v_dot(wo, sf.ng) < 0.0f) { /* two-sided reflection */
-            sf.ng = v_neg(sf.ng);
-            sf.ns = v_neg(sf.ns);
-        }
-        if (v_dot(wo, sf.ns) * v_dot(wo, sf.ng) <= 0.0f)
-            sf.ns = sf.ng;
-        fr = frame_from_normal(sf.ns);
-        wo_l = frame_to_local(&fr, wo);
 
         /* One timed interval: reset the arena, build the closure. */
-        GLINT_TIMED(w, GLINT_BUILD, st, build_closure(w, mat, &wo_l, &closure));
+        GLINT_TIMED(w, GLINT_BUILD, st, build_closure(w, &s->materials[sf.material], &sf.wo_local, &closure));
         w->closures++;
         if (st != GLINT_OK) {
             record_error(w, set->closures == CLOSURES_BLOCKS ? "building a closure"
@@ -330,39 +228,27 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
             break;
         }
 
-        /* Next-event estimation: one point on a quad light, one environment direction. */
+        /* Next-event estimation: one point on a quad light, one environment direction,
+         * every delta light (which only this strategy can reach: BSDF sampling never hits a
+         * point, so they are added whatever the strategy, with weight 1). */
         if (use_nee && s->light_count > 0) {
-            const pt_quad_light *l = &s->lights[pick_light(s, rng_float(r))];
+            const ex_quad_light *l = &s->lights[pick_light(s, rng_float(r))];
             const float u1 = rng_float(r), u2 = rng_float(r);
             const vec3 pl = v_add(l->corner, v_add(v_scale(l->e1, u1), v_scale(l->e2, u2)));
-            const vec3 to = v_sub(pl, sf.p);
-            const float dist = v_len(to);
-            const vec3 wi = v_scale(to, 1.0f / dist);
+            const vec3 wi = v_norm(v_sub(pl, sf.p));
             const float p_light = light_pdf(l, sf.p, pl);
             if (p_light > 0.0f && side_ok(wi, sf.ng, sf.ns)) {
-                glint_eval_result e;
-                memset(&e, 0, sizeof e);
-                e.struct_size = sizeof e;
-                GLINT_TIMED(w, GLINT_EVAL, st,
-                            glint_eval(closure, wo_l, frame_to_local(&fr, wi), &e));
-                if (st != GLINT_OK)
-                    record_error(w, "glint_eval", st);
-                else if (e.value[0] + e.value[1] + e.value[2] > 0.0f) {
-                    /* The shadow ray runs from the offset origin to the light point (not
-                     * along wi: from the moved origin that line would end past the light's
-                     * plane at grazing angles and hit the light itself). */
-                    const vec3 po = offset_point(sf.p, sf.ng, wi);
-                    const vec3 seg = v_sub(pl, po);
-                    const float seg_len = v_len(seg);
-                    const int occ = occluded(w, po, v_scale(seg, 1.0f / seg_len),
-                                             seg_len * (1.0f - 1e-4f));
-                    if (!occ) {
-                        const float weight = mis ? power_heuristic(p_light, e.pdf) : 1.0f;
-                        const vec3 f = v3(e.value[0], e.value[1], e.value[2]);
-                        L = v_add(L, v_scale(v_mul(v_mul(beta, f), l->radiance),
-                                             weight / p_light));
-                    }
-                }
+                /* The shadow ray runs from the offset origin to the light point (not along
+                 * wi: from the moved origin that line would end past the light's plane at
+                 * grazing angles and hit the light itself). */
+                const vec3 po = offset_point(sf.p, sf.ng, wi);
+                const vec3 seg = v_sub(pl, po);
+                const float seg_len = v_len(seg);
+                float pdf;
+                const vec3 f = unoccluded_f(w, closure, &sf, wi, po, v_scale(seg, 1.0f / seg_len),
+                                            seg_len * (1.0f - 1e-4f), &pdf);
+                const float weight = mis ? power_heuristic(p_light, pdf) : 1.0f;
+                L = v_add(L, v_scale(v_mul(v_mul(beta, f), l->radiance), weight / p_light));
             }
         }
         if (use_nee && s->env.kind != ENV_NONE) {
@@ -370,20 +256,20 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
             const float u0 = rng_float(r), u1 = rng_float(r), u2 = rng_float(r);
             const vec3 wi = env_sample(&s->env, u0, u1, u2, &p_env);
             if (p_env > 0.0f && side_ok(wi, sf.ng, sf.ns)) {
-                glint_eval_result e;
-                memset(&e, 0, sizeof e);
-                e.struct_size = sizeof e;
-                GLINT_TIMED(w, GLINT_EVAL, st,
-                            glint_eval(closure, wo_l, frame_to_local(&fr, wi), &e));
-                if (st != GLINT_OK)
-                    record_error(w, "glint_eval", st);
-                else if (e.value[0] + e.value[1] + e.value[2] > 0.0f &&
-                         !occluded(w, offset_point(sf.p, sf.ng, wi), wi, INFINITY)) {
-                    const float weight = mis ? power_heuristic(p_env, e.pdf) : 1.0f;
-                    const vec3 f = v3(e.value[0], e.value[1], e.value[2]);
-                    L = v_add(L, v_scale(v_mul(v_mul(beta, f), env_radiance(&s->env, wi)),
-                                         weight / p_env));
-                }
+                float pdf;
+                const vec3 f = unoccluded_f(w, closure, &sf, wi,
+                                            offset_point(sf.p, sf.ng, wi), wi, INFINITY, &pdf);
+                const float weight = mis ? power_heuristic(p_env, pdf) : 1.0f;
+                L = v_add(L, v_scale(v_mul(v_mul(beta, f), env_radiance(&s->env, wi)),
+                                     weight / p_env));
+            }
+        }
+        for (i = 0; i < delta_light_count(s); i++) {
+            vec3 wi, so, sd, irradiance;
+            float len, pdf;
+            if (delta_light_at(s, i, &sf, &wi, &so, &sd, &len, &irradiance)) {
+                const vec3 f = unoccluded_f(w, closure, &sf, wi, so, sd, len, &pdf);
+                L = v_add(L, v_mul(v_mul(beta, f), irradiance));
             }
         }
 
@@ -394,14 +280,14 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
             vec3 wi;
             memset(&smp, 0, sizeof smp);
             smp.struct_size = sizeof smp;
-            GLINT_TIMED(w, GLINT_SAMPLE, st, glint_sample(closure, wo_l, ul, u0, u1, &smp));
+            GLINT_TIMED(w, GLINT_SAMPLE, st, glint_sample(closure, sf.wo_local, ul, u0, u1, &smp));
             if (st == GLINT_NO_SAMPLE)
                 break;
             if (st != GLINT_OK) {
                 record_error(w, "glint_sample", st);
                 break;
             }
-            wi = frame_to_world(&fr, smp.wi);
+            wi = frame_to_world(&sf.fr, smp.wi);
             if (!side_ok(wi, sf.ng, sf.ns))
                 break;
             beta = v_mul(beta, v3(smp.weight[0], smp.weight[1], smp.weight[2]));
@@ -445,13 +331,11 @@ static void render_tile(worker *w, int tile)
             double sum[3] = {0, 0, 0}, sum_sq[3] = {0, 0, 0};
             uint32_t hits = 0;
             for (k = 0; k < set->spp; k++) {
-                const float px = ((float)x + rng_float(&r)) / (float)set->width * 2.0f - 1.0f;
-                const float py = 1.0f - ((float)y + rng_float(&r)) / (float)set->height * 2.0f;
-                const vec3 dir = v_norm(v_add(
-                    sh->forward, v_add(v_scale(sh->right, px * sh->tan_half * sh->aspect),
-                                       v_scale(sh->up, py * sh->tan_half))));
+                const float jx = set->pixel_center ? 0.5f : rng_float(&r);
+                const float jy = set->pixel_center ? 0.5f : rng_float(&r);
+                const vec3 dir = camera_ray(&sh->view, (float)x + jx, (float)y + jy);
                 int primary = 0;
-                const vec3 L = trace(w, &r, sh->eye, dir, &primary);
+                const vec3 L = trace(w, &r, sh->view.eye, dir, &primary);
                 w->samples++;
                 if (!isfinite(L.x) || !isfinite(L.y) || !isfinite(L.z))
                     w->nonfinite++; /* kept: the image shows it and the checker fails */
@@ -508,7 +392,7 @@ static void progress(int done, int total, double elapsed, int final)
     fflush(stderr);
 }
 
-int render(const pt_scene *scene, const glint_runtime *rt, const pt_settings *set,
+int render(const ex_scene *scene, const glint_runtime *rt, const pt_settings *set,
            pt_accum *acc, pt_stats *stats)
 {
     shared sh;
@@ -529,12 +413,7 @@ int render(const pt_scene *scene, const glint_runtime *rt, const pt_settings *se
     sh.tile_count = sh.tiles_x * sh.tiles_y;
     atomic_init(&sh.next_tile, 0);
     atomic_init(&sh.tiles_done, 0);
-    sh.eye = scene->camera.eye;
-    sh.forward = v_norm(v_sub(scene->camera.target, scene->camera.eye));
-    sh.right = v_norm(v_cross(sh.forward, scene->camera.up));
-    sh.up = v_cross(sh.right, sh.forward);
-    sh.tan_half = tanf(0.5f * scene->camera.vfov_deg * PT_PI / 180.0f);
-    sh.aspect = (float)set->width / (float)set->height;
+    sh.view = camera_view(&scene->camera, set->width, set->height);
 
     workers = calloc((size_t)set->threads, sizeof *workers);
     if (!workers)

@@ -1,7 +1,7 @@
 /* rng.h: PCG32 (O'Neill 2014), one stream per pixel, so images do not depend on the
  * thread count or tile order. */
-#ifndef PT_RNG_H
-#define PT_RNG_H
+#ifndef EX_RNG_H
+#define EX_RNG_H
 
 #include <stdint.h>
 

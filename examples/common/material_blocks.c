@@ -11,25 +11,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pt.h"
-
-#ifndef PT_HAVE_CJSON
-
-int material_decode(pt_material *m, const glint_runtime *rt)
-{
-    (void)rt;
-    fprintf(stderr, "pathtracer: material \"%s\": --closures blocks needs cJSON (libcjson-dev "
-                    "at configure time)\n", m->name);
-    return -1;
-}
-
-#else
+#include "scene.h"
 
 #include <cjson/cJSON.h>
 
-static int bad(const pt_material *m, int lobe, const char *what)
+static int bad(const ex_material *m, int lobe, const char *what)
 {
-    fprintf(stderr, "pathtracer: material \"%s\": lobes[%d]: %s\n", m->name, lobe, what);
+    fprintf(stderr, "%s: material \"%s\": lobes[%d]: %s\n", scene_program, m->name, lobe, what);
     return -1;
 }
 
@@ -53,8 +41,8 @@ static int read_floats(const cJSON *v, float *out, int n)
     return 0;
 }
 
-static int decode_lobe(pt_material *m, const glint_runtime *rt, const cJSON *lobe, int index,
-                       pt_lobe_block *out)
+static int decode_lobe(ex_material *m, const glint_runtime *rt, const cJSON *lobe, int index,
+                       ex_lobe_block *out)
 {
     const cJSON *type = cJSON_GetObjectItemCaseSensitive(lobe, "type"), *item;
     glint_lobe_info info;
@@ -117,14 +105,14 @@ static int decode_lobe(pt_material *m, const glint_runtime *rt, const cJSON *lob
     return 0;
 }
 
-glint_status material_build(const pt_material *m, const glint_runtime *rt, glint_arena *arena,
+glint_status material_build(const ex_material *m, const glint_runtime *rt, glint_arena *arena,
                             const glint_vec3 *wo, glint_closure **out)
 {
     glint_closure *c = NULL;
     glint_status st = glint_closure_begin(rt, arena, wo, m->closure_flags, &c);
     int i;
     for (i = 0; st == GLINT_OK && i < m->lobe_count; i++) {
-        const pt_lobe_block *b = &m->lobes[i];
+        const ex_lobe_block *b = &m->lobes[i];
         st = glint_closure_add_lobe(c, b->type, b->weight, &b->frame, b->params,
                                     b->param_count, NULL);
     }
@@ -135,7 +123,7 @@ glint_status material_build(const pt_material *m, const glint_runtime *rt, glint
 }
 
 /* Both ways of building must give the same closure: compare evals over a few directions. */
-static int self_check(pt_material *m, const glint_runtime *rt)
+static int self_check(ex_material *m, const glint_runtime *rt)
 {
     glint_arena *arena = NULL;
     int i, ok = 1;
@@ -154,12 +142,11 @@ static int self_check(pt_material *m, const glint_runtime *rt)
         if (glint_closure_from_json(rt, arena, m->json, &wo, &cj) != GLINT_OK ||
             material_build(m, rt, arena, &wo, &cb) != GLINT_OK ||
             glint_eval(cj, wo, wi, &ej) != GLINT_OK || glint_eval(cb, wo, wi, &eb) != GLINT_OK) {
-            fprintf(stderr, "pathtracer: material \"%s\": %s\n", m->name, glint_last_error());
+            fprintf(stderr, "%s: material \"%s\": %s\n", scene_program, m->name, glint_last_error());
             ok = 0;
         } else if (memcmp(ej.value, eb.value, sizeof ej.value) != 0 || ej.pdf != eb.pdf) {
-            fprintf(stderr,
-                    "pathtracer: material \"%s\": the decoded parameter blocks do not match "
-                    "glint_closure_from_json\n",
+            fprintf(stderr, "%s: material \"%s\": the decoded parameter blocks do not match "
+                    "glint_closure_from_json\n", scene_program,
                     m->name);
             ok = 0;
         }
@@ -168,13 +155,13 @@ static int self_check(pt_material *m, const glint_runtime *rt)
     return ok ? 0 : -1;
 }
 
-int material_decode(pt_material *m, const glint_runtime *rt)
+int material_decode(ex_material *m, const glint_runtime *rt)
 {
     cJSON *root = cJSON_Parse(m->json);
     const cJSON *lobes, *lobe, *transport;
     int n = 0, rc = -1;
     if (!root) {
-        fprintf(stderr, "pathtracer: material \"%s\": malformed JSON\n", m->name);
+        fprintf(stderr, "%s: material \"%s\": malformed JSON\n", scene_program, m->name);
         return -1;
     }
     lobes = cJSON_GetObjectItemCaseSensitive(root, "lobes");
@@ -183,7 +170,7 @@ int material_decode(pt_material *m, const glint_runtime *rt)
     if (cJSON_IsString(transport) && strcmp(transport->valuestring, "importance") == 0)
         m->closure_flags = GLINT_CLOSURE_IMPORTANCE;
     if (!cJSON_IsArray(lobes) || cJSON_GetArraySize(lobes) > GLINT_MAX_LOBES) {
-        fprintf(stderr, "pathtracer: material \"%s\": needs a \"lobes\" array\n", m->name);
+        fprintf(stderr, "%s: material \"%s\": needs a \"lobes\" array\n", scene_program, m->name);
         goto out;
     }
     m->lobes = calloc((size_t)cJSON_GetArraySize(lobes) + 1, sizeof *m->lobes);
@@ -202,9 +189,8 @@ out:
     return rc;
 }
 
-#endif
 
-void material_free_blocks(pt_material *m)
+void material_free_blocks(ex_material *m)
 {
     int i;
     for (i = 0; i < m->lobe_count; i++)

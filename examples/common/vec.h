@@ -1,6 +1,6 @@
 /* vec.h: the few vector operations the path tracer needs, on glint_vec3. */
-#ifndef PT_VEC_H
-#define PT_VEC_H
+#ifndef EX_VEC_H
+#define EX_VEC_H
 
 #include <math.h>
 
@@ -8,7 +8,7 @@
 
 typedef glint_vec3 vec3;
 
-#define PT_PI 3.14159265358979323846f
+#define EX_PI 3.14159265358979323846f
 
 static inline vec3 v3(float x, float y, float z)
 {

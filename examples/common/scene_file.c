@@ -6,21 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pt.h"
-
-#ifndef PT_SCENE_FILES
-
-int scene_load_file(pt_scene *s, const char *path)
-{
-    (void)s;
-    fprintf(stderr,
-            "pathtracer: %s: this build has no scene-file support (needs libcjson-dev and "
-            "libassimp-dev at configure time)\n",
-            path);
-    return -1;
-}
-
-#else
+#include "scene.h"
 
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
@@ -28,14 +14,14 @@ int scene_load_file(pt_scene *s, const char *path)
 #include <cjson/cJSON.h>
 
 typedef struct loader {
-    pt_scene *scene;
+    ex_scene *scene;
     const char *path; /* the scene file */
     char dir[4096];   /* its directory, for relative mesh paths */
 } loader;
 
 static int fail(const loader *ld, const char *where, const char *message)
 {
-    fprintf(stderr, "pathtracer: %s: %s: %s\n", ld->path, where, message);
+    fprintf(stderr, "%s: %s: %s: %s\n", scene_program, ld->path, where, message);
     return -1;
 }
 
@@ -125,7 +111,7 @@ static const char *get_string(const cJSON *obj, const char *key)
  * description ({"lobes": [...]}). Returns the index or -1. */
 static int material_ref(const loader *ld, const char *where, const cJSON *v)
 {
-    pt_scene *s = ld->scene;
+    ex_scene *s = ld->scene;
     if (cJSON_IsString(v)) {
         int m = scene_find_material(s, v->valuestring);
         const char *builtin;
@@ -159,8 +145,8 @@ static int material_ref(const loader *ld, const char *where, const cJSON *v)
 
 static vec3 rotate_xyz(vec3 p, vec3 deg)
 {
-    const float rx = deg.x * PT_PI / 180.0f, ry = deg.y * PT_PI / 180.0f,
-                rz = deg.z * PT_PI / 180.0f;
+    const float rx = deg.x * EX_PI / 180.0f, ry = deg.y * EX_PI / 180.0f,
+                rz = deg.z * EX_PI / 180.0f;
     vec3 q;
     q = v3(p.x, p.y * cosf(rx) - p.z * sinf(rx), p.y * sinf(rx) + p.z * cosf(rx));
     q = v3(q.x * cosf(ry) + q.z * sinf(ry), q.y, -q.x * sinf(ry) + q.z * cosf(ry));
@@ -198,7 +184,7 @@ static int load_mesh(const loader *ld, const char *where, const cJSON *o, int ma
                                 aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
                                 aiProcess_SortByPType);
     if (!sc) {
-        fprintf(stderr, "pathtracer: %s: %s: %s: %s\n", ld->path, where, path,
+        fprintf(stderr, "%s: %s: %s: %s: %s\n", scene_program, ld->path, where, path,
                 aiGetErrorString());
         return -1;
     }
@@ -313,7 +299,7 @@ static int load_objects(const loader *ld, const cJSON *objects)
                 return fail(ld, where, "\"edge1\" and \"edge2\" must span an area");
             scene_add_quad(ld->scene, c, e1, e2, material);
             if (checker) {
-                pt_object *q;
+                ex_object *q;
                 const int m2 = material_ref(ld, where, checker);
                 if (m2 < 0)
                     return -1;
@@ -366,7 +352,7 @@ static int load_environment(const loader *ld, const cJSON *e)
 {
     static const char *const keys[] = {"type",   "color",     "zenith",      "horizon",
                                        "ground", "intensity", "up_fraction", NULL};
-    pt_env *env = &ld->scene->env;
+    ex_env *env = &ld->scene->env;
     const char *type = get_string(e, "type");
     if (!cJSON_IsObject(e) || !type)
         return fail(ld, "environment", "needs \"type\": sky, uniform or none");
@@ -409,7 +395,7 @@ static int load_environment(const loader *ld, const cJSON *e)
 static int load_camera(const loader *ld, const cJSON *c)
 {
     static const char *const keys[] = {"eye", "target", "up", "fov", NULL};
-    pt_camera *cam = &ld->scene->camera;
+    ex_camera *cam = &ld->scene->camera;
     if (!cJSON_IsObject(c))
         return fail(ld, "camera", "must be an object");
     if (check_keys(ld, "camera", c, keys) || get_vec3(ld, "camera", c, "eye", 1, 0, &cam->eye) ||
@@ -424,7 +410,7 @@ static int load_camera(const loader *ld, const cJSON *c)
     return 0;
 }
 
-int scene_load_file(pt_scene *s, const char *path)
+int scene_load_file(ex_scene *s, const char *path)
 {
     static const char *const keys[] = {"camera", "environment", "materials", "lights",
                                        "objects", NULL};
@@ -442,7 +428,7 @@ int scene_load_file(pt_scene *s, const char *path)
     if (slash)
         snprintf(ld.dir, sizeof ld.dir, "%.*s/", (int)(slash - path), path);
     if (!f) {
-        fprintf(stderr, "pathtracer: cannot open %s\n", path);
+        fprintf(stderr, "%s: cannot open %s\n", scene_program, path);
         return -1;
     }
     fseek(f, 0, SEEK_END);
@@ -452,7 +438,7 @@ int scene_load_file(pt_scene *s, const char *path)
     if (!text || size < 0 || fread(text, 1, (size_t)size, f) != (size_t)size) {
         fclose(f);
         free(text);
-        fprintf(stderr, "pathtracer: cannot read %s\n", path);
+        fprintf(stderr, "%s: cannot read %s\n", scene_program, path);
         return -1;
     }
     fclose(f);
@@ -460,7 +446,7 @@ int scene_load_file(pt_scene *s, const char *path)
     root = cJSON_Parse(text);
     if (!root) {
         const char *at = cJSON_GetErrorPtr();
-        fprintf(stderr, "pathtracer: %s: JSON syntax error near byte %ld\n", path,
+        fprintf(stderr, "%s: %s: JSON syntax error near byte %ld\n", scene_program, path,
                 at ? (long)(at - text) : -1L);
         free(text);
         return -1;
@@ -508,12 +494,10 @@ int scene_load_file(pt_scene *s, const char *path)
     if (load_objects(&ld, item))
         goto out;
     if (s->light_count == 0 && s->env.kind == ENV_NONE)
-        fprintf(stderr, "pathtracer: warning: %s has no light and no environment\n", path);
+        fprintf(stderr, "%s: warning: %s has no light and no environment\n", scene_program, path);
     rc = 0;
 out:
     cJSON_Delete(root);
     free(text);
     return rc;
 }
-
-#endif

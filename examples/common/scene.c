@@ -5,7 +5,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pt.h"
+#include "scene.h"
+
+const char *scene_program = "glint-example";
 
 /* ---- named materials ------------------------------------------------------------------ */
 
@@ -71,7 +73,7 @@ static void *grow(void *array, int *cap, int count, size_t elem)
     *cap = *cap ? *cap * 2 : 8;
     array = realloc(array, (size_t)*cap * elem);
     if (!array) {
-        fprintf(stderr, "pathtracer: out of memory\n");
+        fprintf(stderr, "%s: out of memory\n", scene_program);
         exit(EXIT_FAILURE);
     }
     return array;
@@ -81,13 +83,13 @@ static void *xmalloc(size_t n)
 {
     void *p = malloc(n ? n : 1);
     if (!p) {
-        fprintf(stderr, "pathtracer: out of memory\n");
+        fprintf(stderr, "%s: out of memory\n", scene_program);
         exit(EXIT_FAILURE);
     }
     return p;
 }
 
-void scene_init(pt_scene *s)
+void scene_init(ex_scene *s)
 {
     memset(s, 0, sizeof *s);
     s->camera.eye = v3(0, 0, 5);
@@ -98,7 +100,7 @@ void scene_init(pt_scene *s)
     s->env.intensity = 1.0f;
 }
 
-void scene_free(pt_scene *s)
+void scene_free(ex_scene *s)
 {
     int i;
     for (i = 0; i < s->material_count; i++) {
@@ -113,6 +115,8 @@ void scene_free(pt_scene *s)
     free(s->materials);
     free(s->objects);
     free(s->lights);
+    free(s->point_lights);
+    free(s->dir_lights);
     if (s->rtc)
         rtcReleaseScene(s->rtc);
     if (s->device)
@@ -120,9 +124,9 @@ void scene_free(pt_scene *s)
     memset(s, 0, sizeof *s);
 }
 
-int scene_add_material(pt_scene *s, const char *name, const char *json)
+int scene_add_material(ex_scene *s, const char *name, const char *json)
 {
-    pt_material *m;
+    ex_material *m;
     size_t n = strlen(json);
     s->materials = grow(s->materials, &s->material_cap, s->material_count, sizeof *m);
     m = &s->materials[s->material_count];
@@ -133,7 +137,7 @@ int scene_add_material(pt_scene *s, const char *name, const char *json)
     return s->material_count++;
 }
 
-int scene_find_material(const pt_scene *s, const char *name)
+int scene_find_material(const ex_scene *s, const char *name)
 {
     int i;
     for (i = 0; i < s->material_count; i++)
@@ -142,9 +146,9 @@ int scene_find_material(const pt_scene *s, const char *name)
     return -1;
 }
 
-static pt_object *new_object(pt_scene *s, int kind, int material)
+static ex_object *new_object(ex_scene *s, int kind, int material)
 {
-    pt_object *o;
+    ex_object *o;
     s->objects = grow(s->objects, &s->object_cap, s->object_count, sizeof *o);
     o = &s->objects[s->object_count++];
     memset(o, 0, sizeof *o);
@@ -156,14 +160,14 @@ static pt_object *new_object(pt_scene *s, int kind, int material)
     return o;
 }
 
-void scene_add_sphere(pt_scene *s, vec3 center, float radius, int material)
+void scene_add_sphere(ex_scene *s, vec3 center, float radius, int material)
 {
-    pt_object *o = new_object(s, OBJ_SPHERE, material);
+    ex_object *o = new_object(s, OBJ_SPHERE, material);
     o->center = center;
     o->radius = radius;
 }
 
-static void quad_mesh(pt_object *o, vec3 c, vec3 e1, vec3 e2)
+static void quad_mesh(ex_object *o, vec3 c, vec3 e1, vec3 e2)
 {
     const vec3 p[4] = {c, v_add(c, e1), v_add(v_add(c, e1), e2), v_add(c, e2)};
     static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
@@ -180,15 +184,15 @@ static void quad_mesh(pt_object *o, vec3 c, vec3 e1, vec3 e2)
     memcpy(o->indices, idx, sizeof idx);
 }
 
-void scene_add_quad(pt_scene *s, vec3 corner, vec3 e1, vec3 e2, int material)
+void scene_add_quad(ex_scene *s, vec3 corner, vec3 e1, vec3 e2, int material)
 {
     quad_mesh(new_object(s, OBJ_MESH, material), corner, e1, e2);
 }
 
-void scene_add_mesh(pt_scene *s, float *positions, float *normals, size_t vertex_count,
+void scene_add_mesh(ex_scene *s, float *positions, float *normals, size_t vertex_count,
                     uint32_t *indices, size_t triangle_count, int material)
 {
-    pt_object *o = new_object(s, OBJ_MESH, material);
+    ex_object *o = new_object(s, OBJ_MESH, material);
     o->positions = positions;
     o->normals = normals;
     o->vertex_count = vertex_count;
@@ -196,10 +200,10 @@ void scene_add_mesh(pt_scene *s, float *positions, float *normals, size_t vertex
     o->triangle_count = triangle_count;
 }
 
-void scene_add_quad_light(pt_scene *s, vec3 corner, vec3 e1, vec3 e2, vec3 radiance)
+void scene_add_quad_light(ex_scene *s, vec3 corner, vec3 e1, vec3 e2, vec3 radiance)
 {
-    pt_quad_light *l;
-    pt_object *o;
+    ex_quad_light *l;
+    ex_object *o;
     const vec3 n = v_cross(e1, e2);
     s->lights = grow(s->lights, &s->light_cap, s->light_count, sizeof *l);
     l = &s->lights[s->light_count];
@@ -215,30 +219,49 @@ void scene_add_quad_light(pt_scene *s, vec3 corner, vec3 e1, vec3 e2, vec3 radia
     quad_mesh(o, corner, e1, e2);
 }
 
+void scene_add_point_light(ex_scene *s, vec3 position, vec3 intensity)
+{
+    ex_point_light *l;
+    s->point_lights =
+        grow(s->point_lights, &s->point_light_cap, s->point_light_count, sizeof *l);
+    l = &s->point_lights[s->point_light_count++];
+    l->position = position;
+    l->intensity = intensity;
+}
+
+void scene_add_dir_light(ex_scene *s, vec3 direction, vec3 irradiance)
+{
+    ex_dir_light *l;
+    s->dir_lights = grow(s->dir_lights, &s->dir_light_cap, s->dir_light_count, sizeof *l);
+    l = &s->dir_lights[s->dir_light_count++];
+    l->direction = v_norm(direction);
+    l->irradiance = irradiance;
+}
+
 /* ---- build ----------------------------------------------------------------------------- */
 
 static void embree_error(void *user, enum RTCError code, const char *message)
 {
     (void)user;
-    fprintf(stderr, "pathtracer: embree error %d: %s\n", (int)code, message);
+    fprintf(stderr, "%s: embree error %d: %s\n", scene_program, (int)code, message);
 }
 
-static int check_materials(pt_scene *s, const glint_runtime *rt)
+static int check_materials(ex_scene *s, const glint_runtime *rt)
 {
     glint_arena *arena = NULL;
     int i, ok = 1;
     if (glint_arena_create(1, &arena) != GLINT_OK) {
-        fprintf(stderr, "pathtracer: glint_arena_create: %s\n", glint_last_error());
+        fprintf(stderr, "%s: glint_arena_create: %s\n", scene_program, glint_last_error());
         return -1;
     }
     for (i = 0; i < s->material_count && ok; i++) {
-        pt_material *m = &s->materials[i];
+        ex_material *m = &s->materials[i];
         glint_closure *c = NULL;
         uint32_t n = 0, k;
         glint_arena_reset(arena);
         if (glint_closure_from_json(rt, arena, m->json, NULL, &c) != GLINT_OK ||
             glint_closure_lobe_count(c, &n) != GLINT_OK) {
-            fprintf(stderr, "pathtracer: material \"%s\": %s\n", m->name, glint_last_error());
+            fprintf(stderr, "%s: material \"%s\": %s\n", scene_program, m->name, glint_last_error());
             ok = 0;
             break;
         }
@@ -251,7 +274,7 @@ static int check_materials(pt_scene *s, const glint_runtime *rt)
             info.struct_size = sizeof info;
             if (glint_closure_lobe(c, k, &type, &prob) != GLINT_OK ||
                 glint_lobe_type_info(rt, type, &info) != GLINT_OK) {
-                fprintf(stderr, "pathtracer: material \"%s\": %s\n", m->name, glint_last_error());
+                fprintf(stderr, "%s: material \"%s\": %s\n", scene_program, m->name, glint_last_error());
                 ok = 0;
                 break;
             }
@@ -263,7 +286,7 @@ static int check_materials(pt_scene *s, const glint_runtime *rt)
     return ok ? 0 : -1;
 }
 
-int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
+int scene_build(ex_scene *s, const glint_runtime *rt, int decode_blocks)
 {
     int i;
     float total = 0.0f, run = 0.0f;
@@ -273,11 +296,11 @@ int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
         if (material_decode(&s->materials[i], rt) != 0)
             return -1;
     for (i = 0; i < s->object_count; i++) {
-        const pt_object *o = &s->objects[i];
+        const ex_object *o = &s->objects[i];
         if (o->kind != OBJ_LIGHT &&
             (o->material < 0 || o->material >= s->material_count ||
              o->material2 >= s->material_count)) {
-            fprintf(stderr, "pathtracer: object %d has no valid material\n", i);
+            fprintf(stderr, "%s: object %d has no valid material\n", scene_program, i);
             return -1;
         }
     }
@@ -285,7 +308,7 @@ int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
     for (i = 0; i < s->light_count; i++)
         total += v_luminance(s->lights[i].radiance) * s->lights[i].area;
     for (i = 0; i < s->light_count; i++) {
-        pt_quad_light *l = &s->lights[i];
+        ex_quad_light *l = &s->lights[i];
         l->select_prob = total > 0.0f ? v_luminance(l->radiance) * l->area / total
                                       : 1.0f / (float)s->light_count;
         run += l->select_prob;
@@ -294,7 +317,7 @@ int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
 
     s->device = rtcNewDevice(NULL);
     if (!s->device) {
-        fprintf(stderr, "pathtracer: rtcNewDevice failed (error %d)\n",
+        fprintf(stderr, "%s: rtcNewDevice failed (error %d)\n", scene_program,
                 (int)rtcGetDeviceError(NULL));
         return -1;
     }
@@ -302,7 +325,7 @@ int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
     s->rtc = rtcNewScene(s->device);
     rtcSetSceneFlags(s->rtc, RTC_SCENE_FLAG_ROBUST);
     for (i = 0; i < s->object_count; i++) {
-        const pt_object *o = &s->objects[i];
+        const ex_object *o = &s->objects[i];
         RTCGeometry g;
         if (o->kind == OBJ_SPHERE) {
             float *v;
@@ -330,7 +353,7 @@ int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
     }
     rtcCommitScene(s->rtc);
     if (rtcGetDeviceError(s->device) != RTC_ERROR_NONE) {
-        fprintf(stderr, "pathtracer: building the Embree scene failed\n");
+        fprintf(stderr, "%s: building the Embree scene failed\n", scene_program);
         return -1;
     }
     return 0;
@@ -340,7 +363,7 @@ int scene_build(pt_scene *s, const glint_runtime *rt, int decode_blocks)
 
 static vec3 lerp3(vec3 a, vec3 b, float t) { return v_add(a, v_scale(v_sub(b, a), t)); }
 
-vec3 env_radiance(const pt_env *e, vec3 d)
+vec3 env_radiance(const ex_env *e, vec3 d)
 {
     switch (e->kind) {
     case ENV_UNIFORM:
@@ -359,32 +382,210 @@ vec3 env_radiance(const pt_env *e, vec3 d)
     }
 }
 
-float env_pdf(const pt_env *e, vec3 d)
+float env_pdf(const ex_env *e, vec3 d)
 {
     const float y = d.y / v_len(d);
     if (e->kind == ENV_NONE)
         return 0.0f;
-    return e->up_fraction * fmaxf(y, 0.0f) / PT_PI + (1.0f - e->up_fraction) / (4.0f * PT_PI);
+    return e->up_fraction * fmaxf(y, 0.0f) / EX_PI + (1.0f - e->up_fraction) / (4.0f * EX_PI);
 }
 
-vec3 env_sample(const pt_env *e, float u0, float u1, float u2, float *pdf)
+vec3 env_sample(const ex_env *e, float u0, float u1, float u2, float *pdf)
 {
     vec3 d;
     if (u0 < e->up_fraction) { /* cosine around +y */
-        const float r = sqrtf(u1), phi = 2.0f * PT_PI * u2;
+        const float r = sqrtf(u1), phi = 2.0f * EX_PI * u2;
         d = v3(r * cosf(phi), sqrtf(fmaxf(0.0f, 1.0f - u1)), r * sinf(phi));
     } else { /* uniform sphere */
         const float y = 1.0f - 2.0f * u1, r = sqrtf(fmaxf(0.0f, 1.0f - y * y));
-        const float phi = 2.0f * PT_PI * u2;
+        const float phi = 2.0f * EX_PI * u2;
         d = v3(r * cosf(phi), y, r * sinf(phi));
     }
     *pdf = env_pdf(e, d);
     return d;
 }
 
+vec3 env_mean(const ex_env *e)
+{
+    /* Both kinds depend on the height y only, and y is uniform in [-1, 1] over the sphere:
+     * the mean is (1/2) of the integral over y (midpoint rule). */
+    enum { STEPS = 4096 };
+    vec3 sum = v3(0, 0, 0);
+    int i;
+    for (i = 0; i < STEPS; i++) {
+        const float y = -1.0f + 2.0f * ((float)i + 0.5f) / (float)STEPS;
+        const float r = sqrtf(fmaxf(0.0f, 1.0f - y * y));
+        sum = v_add(sum, env_radiance(e, v3(r, y, 0.0f)));
+    }
+    return v_scale(sum, 1.0f / (float)STEPS);
+}
+
+/* ---- camera, rays and surfaces ---------------------------------------------------------- */
+
+ex_view camera_view(const ex_camera *c, int width, int height)
+{
+    ex_view v;
+    v.eye = c->eye;
+    v.forward = v_norm(v_sub(c->target, c->eye));
+    v.right = v_norm(v_cross(v.forward, c->up));
+    v.up = v_cross(v.right, v.forward);
+    v.tan_half = tanf(0.5f * c->vfov_deg * EX_PI / 180.0f);
+    v.aspect = (float)width / (float)height;
+    v.width = width;
+    v.height = height;
+    return v;
+}
+
+vec3 camera_ray(const ex_view *v, float x, float y)
+{
+    const float px = x / (float)v->width * 2.0f - 1.0f;
+    const float py = 1.0f - y / (float)v->height * 2.0f;
+    return v_norm(v_add(v->forward, v_add(v_scale(v->right, px * v->tan_half * v->aspect),
+                                          v_scale(v->up, py * v->tan_half))));
+}
+
+int scene_intersect(const ex_scene *s, struct RTCIntersectContext *ctx, vec3 o, vec3 d,
+                    ex_hit *h)
+{
+    struct RTCRayHit rh;
+    memset(&rh, 0, sizeof rh);
+    rh.ray.org_x = o.x;
+    rh.ray.org_y = o.y;
+    rh.ray.org_z = o.z;
+    rh.ray.dir_x = d.x;
+    rh.ray.dir_y = d.y;
+    rh.ray.dir_z = d.z;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = INFINITY;
+    rh.ray.mask = 0xffffffffu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(s->rtc, ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return 0;
+    h->t = rh.ray.tfar;
+    h->u = rh.hit.u;
+    h->v = rh.hit.v;
+    h->geom = rh.hit.geomID;
+    h->prim = rh.hit.primID;
+    return 1;
+}
+
+int scene_occluded(const ex_scene *s, struct RTCIntersectContext *ctx, vec3 o, vec3 d,
+                   float tfar)
+{
+    struct RTCRay r;
+    memset(&r, 0, sizeof r);
+    r.org_x = o.x;
+    r.org_y = o.y;
+    r.org_z = o.z;
+    r.dir_x = d.x;
+    r.dir_y = d.y;
+    r.dir_z = d.z;
+    r.tnear = 0.0f;
+    r.tfar = tfar;
+    r.mask = 0xffffffffu;
+    rtcOccluded1(s->rtc, ctx, &r);
+    return r.tfar < 0.0f; /* set to -inf on a hit */
+}
+
+vec3 offset_point(vec3 p, vec3 ng, vec3 dir)
+{
+    const float eps = 2e-4f * (1.0f + v_max_abs(p));
+    return v_madd(p, ng, v_dot(dir, ng) > 0.0f ? eps : -eps);
+}
+
+void surface_at(const ex_scene *s, const ex_hit *h, vec3 o, vec3 d, ex_surface *out)
+{
+    const ex_object *obj = &s->objects[h->geom];
+    out->p = v_madd(o, d, h->t);
+    if (obj->kind == OBJ_SPHERE) {
+        const vec3 n = v_norm(v_sub(out->p, obj->center));
+        out->p = v_madd(obj->center, n, obj->radius); /* back onto the sphere */
+        out->ng = out->ns = n;
+    } else {
+        const uint32_t *tri = &obj->indices[3 * (size_t)h->prim];
+        const float *P = obj->positions;
+        const vec3 p0 = v3(P[3 * tri[0]], P[3 * tri[0] + 1], P[3 * tri[0] + 2]);
+        const vec3 p1 = v3(P[3 * tri[1]], P[3 * tri[1] + 1], P[3 * tri[1] + 2]);
+        const vec3 p2 = v3(P[3 * tri[2]], P[3 * tri[2] + 1], P[3 * tri[2] + 2]);
+        out->ng = v_norm(v_cross(v_sub(p1, p0), v_sub(p2, p0)));
+        out->ns = out->ng;
+        if (obj->normals) {
+            const float *N = obj->normals;
+            const float b0 = 1.0f - h->u - h->v;
+            vec3 n = v3(0, 0, 0);
+            int k;
+            for (k = 0; k < 3; k++) {
+                const float b = k == 0 ? b0 : k == 1 ? h->u : h->v;
+                n = v_madd(n, v3(N[3 * tri[k]], N[3 * tri[k] + 1], N[3 * tri[k] + 2]), b);
+            }
+            if (v_dot(n, n) > 0.0f) {
+                n = v_norm(n);
+                /* Keep the interpolated normal on the geometric normal's side. */
+                out->ns = v_dot(n, out->ng) > 0.0f ? n : v_neg(n);
+            }
+        }
+    }
+    out->material = obj->material;
+    if (obj->material2 >= 0) {
+        const float sc = obj->checker_scale;
+        const long cx = (long)floorf(out->p.x / sc), cz = (long)floorf(out->p.z / sc);
+        if ((cx + cz) & 1)
+            out->material = obj->material2;
+    }
+    out->wo = v_neg(d);
+    if (!s->materials[out->material].transmits && v_dot(out->wo, out->ng) < 0.0f) {
+        /* Two-sided reflection: a surface that does not transmit faces the viewer. */
+        out->ng = v_neg(out->ng);
+        out->ns = v_neg(out->ns);
+    }
+    if (v_dot(out->wo, out->ns) * v_dot(out->wo, out->ng) <= 0.0f)
+        out->ns = out->ng;
+    out->fr = frame_from_normal(out->ns);
+    out->wo_local = frame_to_local(&out->fr, out->wo);
+}
+
+int delta_light_count(const ex_scene *s) { return s->point_light_count + s->dir_light_count; }
+
+int delta_light_at(const ex_scene *s, int index, const ex_surface *sf, vec3 *wi,
+                   vec3 *shadow_origin, vec3 *shadow_dir, float *shadow_len, vec3 *irradiance)
+{
+    if (index < s->point_light_count) {
+        const ex_point_light *l = &s->point_lights[index];
+        const vec3 to = v_sub(l->position, sf->p);
+        const float d2 = v_dot(to, to);
+        vec3 seg;
+        float seg_len;
+        if (!(d2 > 0.0f))
+            return 0;
+        *wi = v_scale(to, 1.0f / sqrtf(d2));
+        if (!side_ok(*wi, sf->ng, sf->ns))
+            return 0;
+        /* As for area lights: the shadow ray ends at the light, from the moved origin. */
+        *shadow_origin = offset_point(sf->p, sf->ng, *wi);
+        seg = v_sub(l->position, *shadow_origin);
+        seg_len = v_len(seg);
+        *shadow_dir = v_scale(seg, 1.0f / seg_len);
+        *shadow_len = seg_len * (1.0f - 1e-4f);
+        *irradiance = v_scale(l->intensity, 1.0f / d2);
+        return 1;
+    } else {
+        const ex_dir_light *l = &s->dir_lights[index - s->point_light_count];
+        *wi = l->direction;
+        if (!side_ok(*wi, sf->ng, sf->ns))
+            return 0;
+        *shadow_origin = offset_point(sf->p, sf->ng, *wi);
+        *shadow_dir = *wi;
+        *shadow_len = INFINITY;
+        *irradiance = l->irradiance;
+        return 1;
+    }
+}
+
 /* ---- built-in scenes -------------------------------------------------------------------- */
 
-void scene_showcase(pt_scene *s, int with_sheen)
+void scene_showcase(ex_scene *s, int with_sheen)
 {
     /* Two staggered rows: the back row first. */
     static const char *const names[8] = {"clay",  "aluminium",   "coated", "sheen",
@@ -428,7 +629,7 @@ void scene_showcase(pt_scene *s, int with_sheen)
     s->camera.vfov_deg = 30.0f;
 }
 
-void scene_furnace(pt_scene *s, const char *material_json)
+void scene_furnace(ex_scene *s, const char *material_json)
 {
     const int m = scene_add_material(s, "furnace", material_json);
     scene_add_sphere(s, v3(0, 0, 0), 1.0f, m);
