@@ -319,9 +319,21 @@ static int load_objects(const loader *ld, const cJSON *objects)
     return 0;
 }
 
+static int get_nonnegative_vec3(const loader *ld, const char *where, const cJSON *obj,
+                                const char *key, vec3 *out)
+{
+    char msg[128];
+    if (get_vec3(ld, where, obj, key, 1, 1, out))
+        return -1;
+    if (out->x < 0.0f || out->y < 0.0f || out->z < 0.0f) {
+        snprintf(msg, sizeof msg, "\"%s\" must not be negative", key);
+        return fail(ld, where, msg);
+    }
+    return 0;
+}
+
 static int load_lights(const loader *ld, const cJSON *lights)
 {
-    static const char *const keys[] = {"type", "corner", "edge1", "edge2", "radiance", NULL};
     const cJSON *l;
     int i = 0;
     if (!cJSON_IsArray(lights))
@@ -330,20 +342,41 @@ static int load_lights(const loader *ld, const cJSON *lights)
     {
         char where[64];
         const char *type = get_string(l, "type");
-        vec3 c, e1, e2, radiance;
         snprintf(where, sizeof where, "lights[%d]", i++);
-        if (!cJSON_IsObject(l) || !type || strcmp(type, "quad") != 0)
-            return fail(ld, where, "a light needs \"type\": \"quad\" (the only kind)");
-        if (check_keys(ld, where, l, keys) || get_vec3(ld, where, l, "corner", 1, 0, &c) ||
-            get_vec3(ld, where, l, "edge1", 1, 0, &e1) ||
-            get_vec3(ld, where, l, "edge2", 1, 0, &e2) ||
-            get_vec3(ld, where, l, "radiance", 1, 1, &radiance))
-            return -1;
-        if (!(v_len(v_cross(e1, e2)) > 0.0f))
-            return fail(ld, where, "\"edge1\" and \"edge2\" must span an area");
-        if (radiance.x < 0.0f || radiance.y < 0.0f || radiance.z < 0.0f)
-            return fail(ld, where, "\"radiance\" must not be negative");
-        scene_add_quad_light(ld->scene, c, e1, e2, radiance);
+        if (!cJSON_IsObject(l) || !type)
+            return fail(ld, where, "a light needs \"type\": quad, point or directional");
+        if (strcmp(type, "quad") == 0) {
+            static const char *const keys[] = {"type", "corner", "edge1", "edge2", "radiance",
+                                               NULL};
+            vec3 c, e1, e2, radiance;
+            if (check_keys(ld, where, l, keys) || get_vec3(ld, where, l, "corner", 1, 0, &c) ||
+                get_vec3(ld, where, l, "edge1", 1, 0, &e1) ||
+                get_vec3(ld, where, l, "edge2", 1, 0, &e2) ||
+                get_nonnegative_vec3(ld, where, l, "radiance", &radiance))
+                return -1;
+            if (!(v_len(v_cross(e1, e2)) > 0.0f))
+                return fail(ld, where, "\"edge1\" and \"edge2\" must span an area");
+            scene_add_quad_light(ld->scene, c, e1, e2, radiance);
+        } else if (strcmp(type, "point") == 0) {
+            static const char *const keys[] = {"type", "position", "intensity", NULL};
+            vec3 p, intensity;
+            if (check_keys(ld, where, l, keys) || get_vec3(ld, where, l, "position", 1, 0, &p) ||
+                get_nonnegative_vec3(ld, where, l, "intensity", &intensity))
+                return -1;
+            scene_add_point_light(ld->scene, p, intensity);
+        } else if (strcmp(type, "directional") == 0) {
+            static const char *const keys[] = {"type", "direction", "irradiance", NULL};
+            vec3 d, irradiance;
+            if (check_keys(ld, where, l, keys) ||
+                get_vec3(ld, where, l, "direction", 1, 0, &d) ||
+                get_nonnegative_vec3(ld, where, l, "irradiance", &irradiance))
+                return -1;
+            if (!(v_len(d) > 0.0f))
+                return fail(ld, where, "\"direction\" must not be zero");
+            scene_add_dir_light(ld->scene, d, irradiance);
+        } else {
+            return fail(ld, where, "unknown \"type\"; valid types: quad point directional");
+        }
     }
     return 0;
 }
@@ -493,7 +526,7 @@ int scene_load_file(ex_scene *s, const char *path)
     }
     if (load_objects(&ld, item))
         goto out;
-    if (s->light_count == 0 && s->env.kind == ENV_NONE)
+    if (s->light_count == 0 && delta_light_count(s) == 0 && s->env.kind == ENV_NONE)
         fprintf(stderr, "%s: warning: %s has no light and no environment\n", scene_program, path);
     rc = 0;
 out:

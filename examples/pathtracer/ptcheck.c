@@ -4,7 +4,8 @@
  *   ptcheck furnace IMG.exr --range R     every pixel's expectation is 1 (white furnace)
  *   ptcheck energy  IMG.exr               a furnace image of a lossy material: <= 1
  *   ptcheck agree   A.exr B.exr...        the images estimate the same thing
- *   ptcheck same    A.exr B.exr           the images are identical, value for value
+ *   ptcheck same    A.exr B.exr           the images are identical, value for value, in
+ *                   their shared channels (with --rel R --abs A: within A + R |value|)
  *
  * Every mode first runs `finite` on its images. Exit status 0 = pass, 1 = fail, 2 = usage.
  *
@@ -324,12 +325,14 @@ out:
     return ok;
 }
 
-static int mode_same(const char *pa, const char *pb)
+/* The channels both images have (by name) match value for value: |a - b| <= abs + rel
+ * max(|a|, |b|) (0 and 0: identical). */
+static int mode_same(const char *pa, const char *pb, double rel, double abs_tol)
 {
     image a, b;
-    int ok = 1;
-    size_t i, n, differ = 0;
-    double worst = 0.0;
+    int ok = 1, c, shared = 0;
+    size_t p, npix, differ = 0, worst_p = 0;
+    double worst = 0.0, worst_a = 0.0, worst_b = 0.0;
     if (load(pa, &a) != 0)
         return 0;
     if (load(pb, &b) != 0) {
@@ -337,24 +340,46 @@ static int mode_same(const char *pa, const char *pb)
         return 0;
     }
     ok = check_finite(pa, &a) & check_finite(pb, &b);
-    if (a.width != b.width || a.height != b.height || a.channels != b.channels) {
-        printf("FAIL %s and %s differ in size or channels\n", pa, pb);
+    if (a.width != b.width || a.height != b.height) {
+        printf("FAIL %s and %s differ in size\n", pa, pb);
         ok = 0;
-    } else {
-        n = (size_t)a.width * (size_t)a.height * (size_t)a.channels;
-        for (i = 0; i < n; i++)
-            if (a.pixels[i] != b.pixels[i]) {
-                differ++;
-                if (fabs((double)a.pixels[i] - b.pixels[i]) > worst)
-                    worst = fabs((double)a.pixels[i] - b.pixels[i]);
-            }
-        if (differ) {
-            printf("FAIL %s and %s: %zu values differ (largest difference %g)\n", pa, pb, differ,
-                   worst);
-            ok = 0;
-        } else
-            printf("ok   %s and %s are identical\n", pa, pb);
+        goto out;
     }
+    npix = (size_t)a.width * (size_t)a.height;
+    for (c = 0; c < a.channels; c++) {
+        const int cb = image_channel(&b, a.channel_names[c]);
+        if (cb < 0)
+            continue;
+        shared++;
+        for (p = 0; p < npix; p++) {
+            const double va = a.pixels[p * (size_t)a.channels + (size_t)c];
+            const double vb = b.pixels[p * (size_t)b.channels + (size_t)cb];
+            const double excess = fabs(va - vb) - (abs_tol + rel * fmax(fabs(va), fabs(vb)));
+            if (va != vb && excess > 0.0) {
+                if (differ++ == 0 || excess > worst) {
+                    worst = excess;
+                    worst_p = p;
+                    worst_a = va;
+                    worst_b = vb;
+                }
+            }
+        }
+    }
+    if (shared < 3) {
+        printf("FAIL %s and %s share fewer than 3 channels\n", pa, pb);
+        ok = 0;
+    } else if (differ) {
+        printf("FAIL %s and %s: %zu values differ by more than %g + %g x value; the worst at "
+               "pixel (%zu, %zu): %.7g vs %.7g\n",
+               pa, pb, differ, abs_tol, rel, worst_p % (size_t)a.width, worst_p / (size_t)a.width,
+               worst_a, worst_b);
+        ok = 0;
+    } else if (rel == 0.0 && abs_tol == 0.0)
+        printf("ok   %s and %s are identical in their %d shared channels\n", pa, pb, shared);
+    else
+        printf("ok   %s and %s match within %g + %g x value in their %d shared channels\n", pa,
+               pb, abs_tol, rel, shared);
+out:
     image_free(&a);
     image_free(&b);
     return ok;
@@ -366,13 +391,14 @@ static int usage(void)
                     "       ptcheck furnace IMG.exr --range R [--delta D] [--tol T]\n"
                     "       ptcheck energy IMG.exr [--sigmas K]\n"
                     "       ptcheck agree A.exr B.exr... [--blocks B] [--alpha A]\n"
-                    "       ptcheck same A.exr B.exr\n");
+                    "       ptcheck same A.exr B.exr [--rel R] [--abs A]\n");
     return 2;
 }
 
 int main(int argc, char **argv)
 {
-    double range = -1.0, delta = 1e-6, tol = 0.01, sigmas = 4.0, alpha = 1e-4;
+    double range = -1.0, delta = 1e-6, tol = 0.01, sigmas = 4.0, alpha = 1e-4, rel = 0.0,
+           abs_tol = 0.0;
     int blocks = 4, i, nfiles = 0, ok = 1;
     char **files;
     if (argc < 3)
@@ -397,6 +423,10 @@ int main(int argc, char **argv)
                 target = &sigmas;
             else if (strcmp(argv[i], "--alpha") == 0)
                 target = &alpha;
+            else if (strcmp(argv[i], "--rel") == 0)
+                target = &rel;
+            else if (strcmp(argv[i], "--abs") == 0)
+                target = &abs_tol;
             else if (strcmp(argv[i], "--blocks") == 0)
                 blocks = atoi(argv[i + 1]);
             else {
@@ -428,7 +458,7 @@ int main(int argc, char **argv)
     } else if (strcmp(argv[1], "energy") == 0 && nfiles == 1) {
         ok = mode_energy(files[0], sigmas);
     } else if (strcmp(argv[1], "same") == 0 && nfiles == 2) {
-        ok = mode_same(files[0], files[1]);
+        ok = mode_same(files[0], files[1], rel, abs_tol);
     } else if (strcmp(argv[1], "agree") == 0 && nfiles >= 2) {
         ok = mode_agree(nfiles, files, blocks, alpha);
     } else {
