@@ -3,7 +3,7 @@
 # Sourced by scripts/run.sh and scripts/test.sh.
 set -euo pipefail
 
-# libembree-dev, libopenimageio-dev, libassimp-dev, libcjson-dev: examples/pathtracer
+# libembree-dev, libopenimageio-dev, libassimp-dev, libcjson-dev: the example hosts
 # (Embree 3 geometry, EXR/PNG output, meshes and scene files).
 packages=(cmake pkg-config gcc g++ make libcmocka-dev
           libembree-dev libopenimageio-dev libassimp-dev libcjson-dev)

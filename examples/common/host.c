@@ -40,7 +40,9 @@ static int exe_dir(char *buf, size_t len)
     return 0;
 }
 
-int host_load_plugins(glint_runtime *rt, const char *plugin)
+/* Whether a "charlie" lobe type is registered afterwards (0 or 1), or -1 when `plugin`
+ * fails to load. */
+static int load_plugins(glint_runtime *rt, const char *plugin)
 {
     uint32_t id;
     if (plugin) {
@@ -59,8 +61,8 @@ int host_load_plugins(glint_runtime *rt, const char *plugin)
     return glint_lobe_type_find(rt, "charlie", &id) == GLINT_OK;
 }
 
-int host_pick_scene(ex_scene *s, const char *scene_file, int furnace, const char *material,
-                    int have_charlie)
+static int pick_scene(ex_scene *s, const char *scene_file, int furnace, const char *material,
+                      int have_charlie)
 {
     if (scene_file)
         return scene_load_file(s, scene_file);
@@ -81,4 +83,25 @@ int host_pick_scene(ex_scene *s, const char *scene_file, int furnace, const char
                 scene_program);
     scene_showcase(s, have_charlie);
     return 0;
+}
+
+int host_open(glint_runtime **rt, ex_scene *s, const char *plugin, const char *scene_file,
+              int furnace, const char *material)
+{
+    int have_charlie;
+    *rt = NULL;
+    scene_init(s);
+    if (furnace && scene_file) {
+        fprintf(stderr, "%s: --furnace and --scene exclude each other\n", scene_program);
+        return -1;
+    }
+    if (glint_runtime_create("threads=1", rt) != GLINT_OK) {
+        fprintf(stderr, "%s: glint_runtime_create: %s\n", scene_program, glint_last_error());
+        *rt = NULL;
+        return -1;
+    }
+    have_charlie = load_plugins(*rt, plugin);
+    if (have_charlie < 0)
+        return -1;
+    return pick_scene(s, scene_file, furnace, material, have_charlie);
 }

@@ -1,5 +1,5 @@
-/* host.h: command-line plumbing both example hosts share: integer options, plugins, and
- * picking the scene (showcase, white furnace or a scene file). */
+/* host.h: command-line plumbing both example hosts share: integer options, the runtime,
+ * plugins, and picking the scene (showcase, white furnace or a scene file). */
 #ifndef EX_HOST_H
 #define EX_HOST_H
 
@@ -10,15 +10,13 @@
 /* Parse an integer option value in [lo, hi]: 0, or -1 with a message on stderr. */
 int host_parse_int(const char *opt, const char *s, long lo, long hi, long *out);
 
-/* Load `plugin`, or when NULL the Charlie sheen plugin beside the executable if it is there.
- * Returns whether a "charlie" lobe type is registered (0 or 1), or -1 with a message on
- * stderr when `plugin` fails to load. */
-int host_load_plugins(glint_runtime *rt, const char *plugin);
-
-/* Fill an initialized scene: the scene file when `scene_file`, else the white furnace with
- * `material` (a name or closure JSON) when `furnace`, else the showcase. 0, or -1 with a
- * message on stderr. */
-int host_pick_scene(ex_scene *s, const char *scene_file, int furnace, const char *material,
-                    int have_charlie);
+/* Start a host: check the scene options, create a runtime with one Glint thread per call
+ * (the hosts run their own threads), load `plugin` (or, when NULL, the Charlie sheen plugin
+ * beside the executable if it is there), and initialize and fill `s`: the scene file when
+ * `scene_file`, else the white furnace with `material` (a name or closure JSON) when
+ * `furnace`, else the showcase (with the sheen sphere when a "charlie" lobe exists).
+ * 0, or -1 with a message on stderr; either way the caller frees `s` and `*rt`. */
+int host_open(glint_runtime **rt, ex_scene *s, const char *plugin, const char *scene_file,
+              int furnace, const char *material);
 
 #endif

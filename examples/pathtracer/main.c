@@ -47,7 +47,7 @@ int main(int argc, char **argv)
 {
     pt_settings set;
     const char *out = "render", *scene_file = NULL, *plugin = NULL, *material = "white";
-    int furnace = 0, aovs = 0, i, have_charlie = 0, status = EXIT_FAILURE;
+    int furnace = 0, aovs = 0, i, status = EXIT_FAILURE;
     glint_runtime *rt = NULL;
     ex_scene scene;
     pt_accum acc;
@@ -159,19 +159,7 @@ int main(int argc, char **argv)
 #undef INT_OPT
 #undef NEED_VALUE
     }
-    if (furnace && scene_file) {
-        fprintf(stderr, "pathtracer: --furnace and --scene exclude each other\n");
-        return EXIT_FAILURE;
-    }
-
-    if (glint_runtime_create("threads=1", &rt) != GLINT_OK) {
-        fprintf(stderr, "pathtracer: glint_runtime_create: %s\n", glint_last_error());
-        return EXIT_FAILURE;
-    }
-    have_charlie = host_load_plugins(rt, plugin);
-    scene_init(&scene);
-    if (have_charlie < 0 ||
-        host_pick_scene(&scene, scene_file, furnace, material, have_charlie) != 0)
+    if (host_open(&rt, &scene, plugin, scene_file, furnace, material) != 0)
         goto done;
     if (scene_build(&scene, rt, set.closures == CLOSURES_BLOCKS) != 0)
         goto done;

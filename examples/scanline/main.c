@@ -37,6 +37,10 @@ typedef struct settings {
 
 enum { PIX_MISS, PIX_LIGHT, PIX_SURFACE };
 
+/* Kinds of timed Glint calls: building closures (glint_arena_reset, the lobe-by-lobe
+ * calls), batch calls (glint_albedo_batch, glint_eval_batch). */
+enum { GLINT_BUILD, GLINT_BATCH, GLINT_KINDS };
+
 /* One G-buffer pixel: what the primary ray saw. */
 typedef struct gpixel {
     int kind;
@@ -66,7 +70,7 @@ typedef struct worker {
     uint8_t *has_closure, *lit;
     float *wo[3], *wi[3], *value[3], *pdf;
     vec3 *irradiance;
-    uint64_t glint_ns, glint_calls, rays, closures_built, errors;
+    uint64_t glint_ns[GLINT_KINDS], glint_calls[GLINT_KINDS], rays, closures_built, errors;
     double seconds[2];
     char first_error[256];
 } worker;
@@ -113,13 +117,13 @@ static void gbuffer_row(worker *w, int y)
 
 /* ---- pass 2: shading -------------------------------------------------------------------- */
 
-/* Time a Glint call into the worker's Glint time. */
-#define GLINT_TIMED(w, status_var, call)                                                     \
+/* Time a Glint call into the worker's Glint time of its kind. */
+#define GLINT_TIMED(w, kind, status_var, call)                                               \
     do {                                                                                     \
         const uint64_t t0_ = now_ns();                                                       \
         status_var = (call);                                                                 \
-        (w)->glint_ns += now_ns() - t0_;                                                     \
-        (w)->glint_calls++;                                                                  \
+        (w)->glint_ns[kind] += now_ns() - t0_;                                               \
+        (w)->glint_calls[kind]++;                                                            \
     } while (0)
 
 /* Build the closure of every surface pixel of row y; returns how many were built. */
@@ -129,7 +133,7 @@ static int build_row_closures(worker *w, const gpixel *row)
     const int width = sh->view.width;
     glint_status st;
     int x, built = 0;
-    GLINT_TIMED(w, st, glint_arena_reset(w->arena));
+    GLINT_TIMED(w, GLINT_BUILD, st, glint_arena_reset(w->arena));
     if (st != GLINT_OK) {
         record_error(w, "glint_arena_reset", st);
         return 0;
@@ -141,7 +145,7 @@ static int build_row_closures(worker *w, const gpixel *row)
         w->has_closure[x] = 0;
         if (g->kind != PIX_SURFACE)
             continue;
-        GLINT_TIMED(w, st,
+        GLINT_TIMED(w, GLINT_BUILD, st,
                     material_build(&sh->scene->materials[g->sf.material], sh->rt, w->arena,
                                    &g->sf.wo_local, &c));
         w->closures_built++;
@@ -178,7 +182,7 @@ static void shade_ambient(worker *w, float *rgb)
     args.albedo_r = w->value[0];
     args.albedo_g = w->value[1];
     args.albedo_b = w->value[2];
-    GLINT_TIMED(w, st, glint_albedo_batch(&args));
+    GLINT_TIMED(w, GLINT_BATCH, st, glint_albedo_batch(&args));
     if (st != GLINT_OK)
         record_error(w, "glint_albedo_batch", st);
     for (x = 0; x < width; x++)
@@ -233,7 +237,7 @@ static void shade_light(worker *w, const gpixel *row, int light, float *rgb)
     args.value_g = w->value[1];
     args.value_b = w->value[2];
     args.pdf = w->pdf;
-    GLINT_TIMED(w, st, glint_eval_batch(&args));
+    GLINT_TIMED(w, GLINT_BATCH, st, glint_eval_batch(&args));
     if (st != GLINT_OK)
         record_error(w, "glint_eval_batch", st);
     for (x = 0; x < width; x++)
@@ -416,15 +420,16 @@ int main(int argc, char **argv)
 {
     settings set;
     const char *out = "scanline", *scene_file = NULL, *plugin = NULL, *material = "white";
-    int furnace = 0, i, have_charlie, status = EXIT_FAILURE, ready = 0;
+    int furnace = 0, i, status = EXIT_FAILURE, ready = 0;
     glint_runtime *rt = NULL;
     ex_scene scene;
     shared sh;
     worker *workers = NULL;
     double seconds[2];
     size_t npix, nonfinite = 0;
-    uint64_t rays = 0, closures = 0, glint_calls = 0, errors = 0;
-    double glint_s = 0.0, thread_s = 0.0;
+    uint64_t rays = 0, closures = 0, errors = 0, glint_calls[GLINT_KINDS] = {0, 0};
+    double glint_s[GLINT_KINDS] = {0.0, 0.0}, thread_s = 0.0;
+    int k;
     char first_error[256] = "";
 
     scene_program = "scanline";
@@ -496,20 +501,7 @@ int main(int argc, char **argv)
             return EXIT_FAILURE;
         }
     }
-    if (furnace && scene_file) {
-        fprintf(stderr, "scanline: --furnace and --scene exclude each other\n");
-        return EXIT_FAILURE;
-    }
-
-    /* One Glint thread per call: the host parallelizes over scanlines. */
-    if (glint_runtime_create("threads=1", &rt) != GLINT_OK) {
-        fprintf(stderr, "scanline: glint_runtime_create: %s\n", glint_last_error());
-        return EXIT_FAILURE;
-    }
-    have_charlie = host_load_plugins(rt, plugin);
-    scene_init(&scene);
-    if (have_charlie < 0 ||
-        host_pick_scene(&scene, scene_file, furnace, material, have_charlie) != 0)
+    if (host_open(&rt, &scene, plugin, scene_file, furnace, material) != 0)
         goto done;
     for (i = 0; i < scene.light_count; i++) { /* quad lights as point lights */
         const ex_quad_light *l = &scene.lights[i];
@@ -555,8 +547,10 @@ int main(int argc, char **argv)
         const worker *w = &workers[i];
         rays += w->rays;
         closures += w->closures_built;
-        glint_calls += w->glint_calls;
-        glint_s += (double)w->glint_ns * 1e-9;
+        for (k = 0; k < GLINT_KINDS; k++) {
+            glint_calls[k] += w->glint_calls[k];
+            glint_s[k] += (double)w->glint_ns[k] * 1e-9;
+        }
         thread_s += w->seconds[1];
         if (w->errors && !errors)
             memcpy(first_error, w->first_error, sizeof first_error);
@@ -569,13 +563,17 @@ int main(int argc, char **argv)
                     scene_file ? scene_file : furnace ? "furnace" : "showcase") != 0)
         goto done;
 
-    printf("G-buffer: %.1f ms (%.2f M primary rays/s); shading: %.1f ms, %.2f M pixels/s, "
-           "%.1f M closures, %.1f%% of shading-thread time in %.2f M Glint calls "
-           "(arena reset, closure builds, batch calls); %.1f M rays in all\n",
+    printf("G-buffer: %.1f ms, %.2f M primary rays/s\n"
+           "shading:  %.1f ms, %.2f M pixels/s, %.3f M closures, %.1f M rays in all\n",
            seconds[0] * 1e3, (double)npix * 1e-6 / seconds[0], seconds[1] * 1e3,
-           (double)npix * 1e-6 / seconds[1], (double)closures * 1e-6,
-           thread_s > 0.0 ? 100.0 * glint_s / thread_s : 0.0, (double)glint_calls * 1e-6,
-           (double)rays * 1e-6);
+           (double)npix * 1e-6 / seconds[1], (double)closures * 1e-6, (double)rays * 1e-6);
+    for (k = 0; k < GLINT_KINDS; k++) {
+        static const char *const kinds[GLINT_KINDS] = {
+            "closure builds (arena reset + lobe blocks)", "batch calls (albedo, eval)"};
+        printf("  %-42s %5.1f%% of shading-thread time, %7.0f calls, %6.0f ns each\n",
+               kinds[k], thread_s > 0.0 ? 100.0 * glint_s[k] / thread_s : 0.0,
+               (double)glint_calls[k], glint_calls[k] ? glint_s[k] * 1e9 / glint_calls[k] : 0.0);
+    }
     if (nonfinite)
         printf("warning: %zu pixel values are NaN or infinite\n", nonfinite);
     if (errors)
