@@ -3,9 +3,20 @@
 #ifndef EX_HOST_H
 #define EX_HOST_H
 
+#include <stdint.h>
+#include <time.h>
+
 #include "scene.h"
 
 #define CHARLIE_FILE "glint_charlie.so"
+
+/* Monotonic clock in nanoseconds, for the hosts' timings (needs _POSIX_C_SOURCE). */
+static inline uint64_t host_now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
+}
 
 /* Parse an integer option value in [lo, hi]: 0, or -1 with a message on stderr. */
 int host_parse_int(const char *opt, const char *s, long lo, long hi, long *out);

@@ -498,6 +498,7 @@ vec3 offset_point(vec3 p, vec3 ng, vec3 dir)
 void surface_at(const ex_scene *s, const ex_hit *h, vec3 o, vec3 d, ex_surface *out)
 {
     const ex_object *obj = &s->objects[h->geom];
+    const vec3 wo = v_neg(d);
     out->p = v_madd(o, d, h->t);
     if (obj->kind == OBJ_SPHERE) {
         const vec3 n = v_norm(v_sub(out->p, obj->center));
@@ -534,16 +535,15 @@ void surface_at(const ex_scene *s, const ex_hit *h, vec3 o, vec3 d, ex_surface *
         if ((cx + cz) & 1)
             out->material = obj->material2;
     }
-    out->wo = v_neg(d);
-    if (!s->materials[out->material].transmits && v_dot(out->wo, out->ng) < 0.0f) {
+    if (!s->materials[out->material].transmits && v_dot(wo, out->ng) < 0.0f) {
         /* Two-sided reflection: a surface that does not transmit faces the viewer. */
         out->ng = v_neg(out->ng);
         out->ns = v_neg(out->ns);
     }
-    if (v_dot(out->wo, out->ns) * v_dot(out->wo, out->ng) <= 0.0f)
+    if (v_dot(wo, out->ns) * v_dot(wo, out->ng) <= 0.0f)
         out->ns = out->ng;
     out->fr = frame_from_normal(out->ns);
-    out->wo_local = frame_to_local(&out->fr, out->wo);
+    out->wo_local = frame_to_local(&out->fr, wo);
 }
 
 int delta_light_count(const ex_scene *s) { return s->point_light_count + s->dir_light_count; }

@@ -186,7 +186,7 @@ int scene_occluded(const ex_scene *s, struct RTCIntersectContext *ctx, vec3 o, v
 /* A shading point: position, geometric and shading normals facing the viewer unless the
  * material transmits, the shading frame (z = ns) Glint works in, wo in that frame. */
 typedef struct ex_surface {
-    vec3 p, ng, ns, wo;
+    vec3 p, ng, ns;
     frame fr;
     vec3 wo_local;
     int material;

@@ -101,6 +101,18 @@ static int get_vec3(const loader *ld, const char *where, const cJSON *obj, const
     return 0;
 }
 
+/* "corner", "edge1", "edge2" of a parallelogram that spans an area. */
+static int get_parallelogram(const loader *ld, const char *where, const cJSON *obj, vec3 *corner,
+                             vec3 *e1, vec3 *e2)
+{
+    if (get_vec3(ld, where, obj, "corner", 1, 0, corner) ||
+        get_vec3(ld, where, obj, "edge1", 1, 0, e1) || get_vec3(ld, where, obj, "edge2", 1, 0, e2))
+        return -1;
+    if (!(v_len(v_cross(*e1, *e2)) > 0.0f))
+        return fail(ld, where, "\"edge1\" and \"edge2\" must span an area");
+    return 0;
+}
+
 static const char *get_string(const cJSON *obj, const char *key)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
@@ -290,13 +302,9 @@ static int load_objects(const loader *ld, const cJSON *objects)
             vec3 c, e1, e2;
             float scale = 1.0f;
             const cJSON *checker = cJSON_GetObjectItemCaseSensitive(o, "checker");
-            if (check_keys(ld, where, o, keys) || get_vec3(ld, where, o, "corner", 1, 0, &c) ||
-                get_vec3(ld, where, o, "edge1", 1, 0, &e1) ||
-                get_vec3(ld, where, o, "edge2", 1, 0, &e2) ||
+            if (check_keys(ld, where, o, keys) || get_parallelogram(ld, where, o, &c, &e1, &e2) ||
                 get_number(ld, where, o, "checker_scale", 0, &scale))
                 return -1;
-            if (!(v_len(v_cross(e1, e2)) > 0.0f))
-                return fail(ld, where, "\"edge1\" and \"edge2\" must span an area");
             scene_add_quad(ld->scene, c, e1, e2, material);
             if (checker) {
                 ex_object *q;
@@ -349,13 +357,9 @@ static int load_lights(const loader *ld, const cJSON *lights)
             static const char *const keys[] = {"type", "corner", "edge1", "edge2", "radiance",
                                                NULL};
             vec3 c, e1, e2, radiance;
-            if (check_keys(ld, where, l, keys) || get_vec3(ld, where, l, "corner", 1, 0, &c) ||
-                get_vec3(ld, where, l, "edge1", 1, 0, &e1) ||
-                get_vec3(ld, where, l, "edge2", 1, 0, &e2) ||
+            if (check_keys(ld, where, l, keys) || get_parallelogram(ld, where, l, &c, &e1, &e2) ||
                 get_nonnegative_vec3(ld, where, l, "radiance", &radiance))
                 return -1;
-            if (!(v_len(v_cross(e1, e2)) > 0.0f))
-                return fail(ld, where, "\"edge1\" and \"edge2\" must span an area");
             scene_add_quad_light(ld->scene, c, e1, e2, radiance);
         } else if (strcmp(type, "point") == 0) {
             static const char *const keys[] = {"type", "position", "intensity", NULL};

@@ -14,9 +14,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
+#include "host.h"
 #include "pt.h"
 #include "rng.h"
 
@@ -44,20 +44,13 @@ typedef struct worker {
     char first_error[256];
 } worker;
 
-static uint64_t now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
 /* Run a glint call and, unless --no-timing, add its duration to the worker's Glint time. */
 #define GLINT_TIMED(w, kind, status_var, call)                                               \
     do {                                                                                     \
         if ((w)->sh->set->timing) {                                                          \
-            const uint64_t t0_ = now_ns();                                                   \
+            const uint64_t t0_ = host_now_ns();                                                   \
             status_var = (call);                                                             \
-            (w)->glint_ns[kind] += now_ns() - t0_;                                           \
+            (w)->glint_ns[kind] += host_now_ns() - t0_;                                           \
         } else {                                                                             \
             status_var = (call);                                                             \
         }                                                                                    \
@@ -73,13 +66,13 @@ static void calibrate_timer(double *inside_ns, double *pair_ns)
     *inside_ns = *pair_ns = 1e30;
     for (batch = 0; batch < 5; batch++) {
         uint64_t inside = 0;
-        const uint64_t start = now_ns();
+        const uint64_t start = host_now_ns();
         double t;
         for (i = 0; i < 20000; i++) {
-            const uint64_t t0 = now_ns();
-            inside += now_ns() - t0;
+            const uint64_t t0 = host_now_ns();
+            inside += host_now_ns() - t0;
         }
-        t = (double)(now_ns() - start) / 20000.0;
+        t = (double)(host_now_ns() - start) / 20000.0;
         if ((double)inside / 20000.0 < *inside_ns)
             *inside_ns = (double)inside / 20000.0;
         if (t < *pair_ns)
@@ -358,7 +351,7 @@ static void render_tile(worker *w, int tile)
 static void *worker_main(void *arg)
 {
     worker *w = arg;
-    const uint64_t t0 = now_ns();
+    const uint64_t t0 = host_now_ns();
     for (;;) {
         const int tile = atomic_fetch_add(&w->sh->next_tile, 1);
         if (tile >= w->sh->tile_count)
@@ -366,7 +359,7 @@ static void *worker_main(void *arg)
         render_tile(w, tile);
         atomic_fetch_add(&w->sh->tiles_done, 1);
     }
-    w->thread_seconds = (double)(now_ns() - t0) * 1e-9;
+    w->thread_seconds = (double)(host_now_ns() - t0) * 1e-9;
     return NULL;
 }
 
@@ -399,7 +392,7 @@ int render(const ex_scene *scene, const glint_runtime *rt, const pt_settings *se
     worker *workers;
     int i, k, started = 0;
     const int tty = isatty(STDERR_FILENO);
-    const uint64_t t0 = now_ns();
+    const uint64_t t0 = host_now_ns();
     int last_shown = -1;
 
     memset(&sh, 0, sizeof sh);
@@ -441,7 +434,7 @@ int render(const ex_scene *scene, const glint_runtime *rt, const pt_settings *se
     /* With fewer threads than asked, the started ones still take every tile. */
     for (;;) {
         const int done = atomic_load(&sh.tiles_done);
-        const double elapsed = (double)(now_ns() - t0) * 1e-9;
+        const double elapsed = (double)(host_now_ns() - t0) * 1e-9;
         if (done >= sh.tile_count)
             break;
         if (!set->quiet) {
@@ -460,7 +453,7 @@ int render(const ex_scene *scene, const glint_runtime *rt, const pt_settings *se
     }
     for (i = 0; i < started; i++)
         pthread_join(workers[i].thread, NULL);
-    stats->seconds = (double)(now_ns() - t0) * 1e-9;
+    stats->seconds = (double)(host_now_ns() - t0) * 1e-9;
     if (set->timing)
         calibrate_timer(&stats->timer_inside_ns, &stats->timer_pair_ns);
     if (!set->quiet)

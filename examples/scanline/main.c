@@ -24,7 +24,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "host.h"
 #include "image_io.h"
@@ -75,13 +74,6 @@ typedef struct worker {
     char first_error[256];
 } worker;
 
-static uint64_t now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec;
-}
-
 static void record_error(worker *w, const char *what, glint_status st)
 {
     if (w->errors++ == 0)
@@ -120,9 +112,9 @@ static void gbuffer_row(worker *w, int y)
 /* Time a Glint call into the worker's Glint time of its kind. */
 #define GLINT_TIMED(w, kind, status_var, call)                                               \
     do {                                                                                     \
-        const uint64_t t0_ = now_ns();                                                       \
+        const uint64_t t0_ = host_now_ns();                                                       \
         status_var = (call);                                                                 \
-        (w)->glint_ns[kind] += now_ns() - t0_;                                               \
+        (w)->glint_ns[kind] += host_now_ns() - t0_;                                               \
         (w)->glint_calls[kind]++;                                                            \
     } while (0)
 
@@ -276,7 +268,7 @@ static void *worker_main(void *arg)
 {
     worker *w = arg;
     shared *sh = w->sh;
-    const uint64_t t0 = now_ns();
+    const uint64_t t0 = host_now_ns();
     for (;;) {
         const int y = atomic_fetch_add(&sh->next_row, 1);
         if (y >= sh->view.height)
@@ -286,14 +278,14 @@ static void *worker_main(void *arg)
         else
             shade_row(w, y);
     }
-    w->seconds[sh->pass] = (double)(now_ns() - t0) * 1e-9;
+    w->seconds[sh->pass] = (double)(host_now_ns() - t0) * 1e-9;
     return NULL;
 }
 
 /* Run one pass over the rows on `count` workers; its wall time in seconds, or -1. */
 static double run_pass(shared *sh, worker *workers, int count, int pass)
 {
-    const uint64_t t0 = now_ns();
+    const uint64_t t0 = host_now_ns();
     int i, started = 0;
     sh->pass = pass;
     atomic_store(&sh->next_row, 0);
@@ -308,7 +300,7 @@ static double run_pass(shared *sh, worker *workers, int count, int pass)
     }
     for (i = 0; i < started; i++)
         pthread_join(workers[i].thread, NULL);
-    return (double)(now_ns() - t0) * 1e-9;
+    return (double)(host_now_ns() - t0) * 1e-9;
 }
 
 static int worker_init(worker *w, shared *sh, int width)
