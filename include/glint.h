@@ -53,7 +53,18 @@
 #define GLINT_PARAM_ENUM 2
 
 /*
- An arena of closures owned by the caller; one thread at a time.
+ Destroyed runtimes and arenas whose shells stay readable.
+ */
+#define QUARANTINE_SHELLS 1024
+
+/*
+ Most bytes of closure slots that destroyed arenas keep in the quarantine.
+ */
+#define QUARANTINE_BYTES (16 << 20)
+
+/*
+ An arena of closures owned by the caller; one thread at a time. A small shell
+ (see `handle`) around its slots.
  */
 typedef struct glint_arena glint_arena;
 
@@ -63,12 +74,18 @@ typedef struct glint_arena glint_arena;
 typedef struct glint_closure glint_closure;
 
 /*
- The runtime handle: owns the registry and settings. Read-only after setup.
+ The runtime handle: a small shell (see `handle`) around what the runtime owns.
  */
 typedef struct glint_runtime glint_runtime;
 
 /*
- A status code: 0 (`GLINT_OK`) on success.
+ A status code: 0 (`GLINT_OK`) on success. A failing call (any status but
+ `GLINT_OK`, including `GLINT_NO_SAMPLE`) leaves every output it was given in one
+ state, set before anything else is checked: output handles NULL, numbers and ids
+ 0, strings NULL, float arrays zeroed, result and info structs zeroed except
+ `struct_size` (and `glint_sample_result.eta` = 1). A NULL output, or a struct whose
+ `struct_size` is too small, is not written. Batch calls zero the outputs of invalid
+ lanes (see `glint_eval_batch`). A failing builder call leaves its closure unchanged.
  */
 typedef uint32_t glint_status;
 
@@ -372,6 +389,12 @@ typedef struct glint_param_info {
 
 #define GLINT_ERROR_PLUGIN_BLOCK_SIZE 19
 
+/*
+ A runtime, arena or closure handle that was destroyed, reset (closures of a reset
+ arena) or belongs to a destroyed runtime; see `glint_runtime_destroy`.
+ */
+#define GLINT_ERROR_INVALID_HANDLE 20
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -379,7 +402,7 @@ extern "C" {
 /*
  `glint_eval` over SoA arrays. Every batch call runs on the kernel set (`isa=`) and
  threads (`threads=`) of the runtime its closure was built with (with per-lane
- closures, the first non-NULL one's); lanes are grouped by closure shape, and results
+ closures, the first active lane's); lanes are grouped by closure shape, and results
  do not depend on the thread count. Invalid lanes get zeroed outputs and the call
  returns the first one's error (`lane i: ...`); the other lanes are computed.
 
@@ -421,18 +444,28 @@ glint_status glint_albedo_batch(const struct glint_albedo_batch_args *args);
 glint_status glint_arena_create(size_t capacity, struct glint_arena **out);
 
 /*
- Free every closure of the arena at once; their handles become invalid.
+ Free every closure of the arena at once. Their handles become invalid, and any
+ call with one returns `GLINT_ERROR_INVALID_HANDLE`, also after a new closure
+ reuses the slot (each handle carries the arena's reset count modulo 65536, so
+ only a handle from exactly a multiple of 65536 resets ago goes undetected).
 
  # Safety
- `arena` is NULL or a live arena handle.
+ `arena` is NULL or a handle from `glint_arena_create` (see `glint_arena_destroy`).
  */
 glint_status glint_arena_reset(struct glint_arena *arena);
 
 /*
- Destroy an arena and its closures (NULL is ignored).
+ Destroy an arena and its closures (NULL is ignored). Afterwards a call with the
+ arena or one of its closures returns `GLINT_ERROR_INVALID_HANDLE`, and destroying
+ it again is ignored and leaves that message for `glint_last_error`. This holds
+ while the arena is quarantined: its shell until `QUARANTINE_SHELLS` (1024) more
+ runtimes and arenas were destroyed, its closure slots while the most recently
+ destroyed arenas' slots total at most `QUARANTINE_BYTES` (16 MiB; an arena larger
+ than that frees them at once). Beyond that, for pointers never returned by this
+ library and for calls that race with the destroy, the behaviour is undefined.
 
  # Safety
- `arena` is NULL or a handle from `glint_arena_create` not yet destroyed.
+ `arena` is NULL or a handle from `glint_arena_create`.
  */
 void glint_arena_destroy(struct glint_arena *arena);
 
@@ -590,10 +623,16 @@ glint_status glint_runtime_create(const char *config, struct glint_runtime **out
 
 /*
  Destroy a runtime (NULL is ignored). Arenas and closures made with it must not be
- used afterwards.
+ used afterwards: closure calls then return `GLINT_ERROR_INVALID_HANDLE`, as does a
+ call on the destroyed runtime; destroying it again is ignored and leaves that
+ message for `glint_last_error`. This holds while the handle's small shell is
+ quarantined, that is until `QUARANTINE_SHELLS` (1024) more runtimes and arenas
+ were destroyed; after that, and for pointers never returned by
+ `glint_runtime_create`, the behaviour is undefined, as is a call that races with
+ the destroy.
 
  # Safety
- `runtime` is NULL or a handle from `glint_runtime_create` not yet destroyed.
+ `runtime` is NULL or a handle from `glint_runtime_create`.
  */
 void glint_runtime_destroy(struct glint_runtime *runtime);
 

@@ -28,10 +28,11 @@ pub enum Status {
     DuplicateName = 17,
     PluginParams = 18,
     PluginBlockSize = 19,
+    InvalidHandle = 20,
 }
 
 impl Status {
-    pub const ALL: [Status; 20] = [
+    pub const ALL: [Status; 21] = [
         Status::Ok,
         Status::NullPointer,
         Status::InvalidArgument,
@@ -52,6 +53,7 @@ impl Status {
         Status::DuplicateName,
         Status::PluginParams,
         Status::PluginBlockSize,
+        Status::InvalidHandle,
     ];
 
     /// A static description, NUL-terminated so the C API can hand it out as is.
@@ -82,6 +84,9 @@ impl Status {
             Status::PluginParams => c"malformed plugin lobe declaration or parameter table",
             Status::PluginBlockSize => {
                 c"plugin parameter block size or alignment does not match its table"
+            }
+            Status::InvalidHandle => {
+                c"the handle was destroyed, reset or never created by this library"
             }
         }
     }

@@ -57,8 +57,18 @@ impl<T> Arena<T> {
         Ok(self.slots.last_mut().expect("just pushed"))
     }
 
-    /// Free every closure; handles to them become invalid.
+    /// The closures allocated since the last reset.
+    pub fn iter(&self) -> impl Iterator<Item = &T> {
+        self.slots.iter()
+    }
+
+    /// Free every closure; handles to them become invalid. The slots stay allocated.
     pub fn reset(&mut self) {
         self.slots.clear();
+    }
+
+    /// Free every closure and the slots themselves (the arena's end of life).
+    pub fn release(&mut self) {
+        self.slots = Vec::new();
     }
 }

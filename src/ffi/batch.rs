@@ -182,8 +182,14 @@ struct CClosures<'a>(&'a [*const glint_closure]);
 
 impl<'a> batch::ClosureSource<'a> for CClosures<'a> {
     fn closure(&self, lane: usize) -> Result<&'a Closure, Error> {
-        // SAFETY: the caller passes NULL or live handles (documented contract).
-        Ok(&unsafe { deref(self.0[lane], "closures[lane]") }?.closure)
+        Ok(&self.handle(lane)?.closure)
+    }
+}
+
+impl<'a> CClosures<'a> {
+    fn handle(&self, lane: usize) -> Result<&'a glint_closure, Error> {
+        // SAFETY: the caller passes NULL or closure handles (documented contract).
+        unsafe { closure_handle(self.0[lane], "closures[lane]") }
     }
 }
 
@@ -198,15 +204,19 @@ enum Lanes<'a> {
 }
 
 impl Lanes<'_> {
-    /// The kernels and threads of the runtime the closures were built with (the
-    /// first non-NULL handle's, for per-lane closures).
-    fn exec(&self) -> Exec<'_> {
+    /// The kernels and threads of the runtime the closures were built with (for
+    /// per-lane closures, the first active lane's with a valid handle: inactive lanes'
+    /// handles are never read).
+    fn exec(&self, active: Option<&[u8]>) -> Exec<'_> {
         let first = match self {
             Lanes::One(c) => Some(*c),
-            // SAFETY: handles are NULL or live per the contract.
-            Lanes::PerLane(c) => c.0.iter().find_map(|&h| unsafe { h.as_ref() }),
+            Lanes::PerLane(c) => (0..c.0.len())
+                .filter(|&lane| active.is_none_or(|a| a[lane] != 0))
+                .find_map(|lane| c.handle(lane).ok()),
         };
-        first.map_or(Exec::scalar(), |c| c.runtime().exec())
+        first
+            .and_then(|c| c.runtime().ok())
+            .map_or(Exec::scalar(), |rt| rt.runtime.exec())
     }
 }
 
@@ -220,7 +230,7 @@ unsafe fn lanes<'a>(
     if closures.is_null() {
         // SAFETY: per the contract.
         Ok(Lanes::One(unsafe {
-            deref(closure, "closure (and closures is NULL)")
+            closure_handle(closure, "closure (and closures is NULL)")
         }?))
     } else {
         // SAFETY: per the contract.
@@ -313,7 +323,7 @@ macro_rules! with_input {
 
 /// `glint_eval` over SoA arrays. Every batch call runs on the kernel set (`isa=`) and
 /// threads (`threads=`) of the runtime its closure was built with (with per-lane
-/// closures, the first non-NULL one's); lanes are grouped by closure shape, and results
+/// closures, the first active lane's); lanes are grouped by closure shape, and results
 /// do not depend on the thread count. Invalid lanes get zeroed outputs and the call
 /// returns the first one's error (`lane i: ...`); the other lanes are computed.
 ///
@@ -336,7 +346,7 @@ pub unsafe extern "C" fn glint_eval_batch(args: *const glint_eval_batch_args) ->
                 pdf_reverse: optional(a.pdf_reverse, n),
             };
             with_input!(lanes, n, active, wo, |input| batch::eval(
-                &lanes.exec(),
+                &lanes.exec(active),
                 &input,
                 wi,
                 out
@@ -362,7 +372,7 @@ pub unsafe extern "C" fn glint_pdf_batch(args: *const glint_pdf_batch_args) -> g
             let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
             let pdf = output(a.pdf, n, "pdf")?;
             with_input!(lanes, n, active, wo, |input| batch::pdf(
-                &lanes.exec(),
+                &lanes.exec(active),
                 &input,
                 wi,
                 pdf
@@ -406,7 +416,7 @@ pub unsafe extern "C" fn glint_sample_batch(args: *const glint_sample_batch_args
                 roughness: optional(a.roughness, n),
             };
             with_input!(lanes, n, active, wo, |input| batch::sample(
-                &lanes.exec(),
+                &lanes.exec(active),
                 &input,
                 u,
                 out
@@ -431,7 +441,7 @@ pub unsafe extern "C" fn glint_albedo_batch(args: *const glint_albedo_batch_args
             let (lanes, active, wo) = read_common(&a.common())?;
             let out = soa_out(a.albedo_r, a.albedo_g, a.albedo_b, n, "albedo")?;
             with_input!(lanes, n, active, wo, |input| batch::albedo(
-                &lanes.exec(),
+                &lanes.exec(active),
                 &input,
                 out
             ))

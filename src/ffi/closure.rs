@@ -4,25 +4,84 @@ use super::*;
 use crate::closure::{Arena, Closure, EvalResult, SampleResult};
 use crate::json;
 use crate::lobes::Transport;
-use crate::math::{Frame, Rgb, Vec3};
+use crate::math::{Frame, Vec3};
 
-/// An arena of closures owned by the caller; one thread at a time.
+/// An arena of closures owned by the caller; one thread at a time. A small shell
+/// (see `handle`) around its slots.
 pub struct glint_arena {
+    tag: Tag,
+    /// Bumped by every reset; closure handles carry the one they were built in.
+    generation: u16,
     arena: Arena<glint_closure>,
 }
 
 /// A closure: built inside an arena, immutable and thread-safe once finished.
 pub struct glint_closure {
+    /// `closure_tag(generation)` while live, then poisoned by reset or destroy.
+    tag: Tag,
     pub(crate) closure: Closure,
     runtime: *const glint_runtime,
 }
 
 impl glint_closure {
-    /// The runtime the closure was built with.
-    pub(crate) fn runtime(&self) -> &crate::Runtime {
-        // SAFETY: runtimes outlive the arenas and closures made with them (documented
-        // on `glint_runtime_destroy`).
-        unsafe { &(*self.runtime).runtime }
+    /// The runtime the closure was built with, if it was not destroyed; a separate
+    /// object, so its borrow does not hold the closure.
+    pub(crate) fn runtime<'r>(&self) -> Result<&'r LiveRuntime, Error> {
+        // SAFETY: the runtime was live when the closure was built, and a destroyed
+        // runtime's shell stays readable while quarantined (`glint_runtime_destroy`).
+        unsafe { &*self.runtime }
+            .live()
+            .map_err(|e| invalid(format!("the closure's {}", e.message)))
+    }
+}
+
+/// The closure a handle names, checked: its slot's tag matches the handle's
+/// generation and its runtime is live.
+///
+/// # Safety
+/// `p` is NULL or a handle from a closure constructor (see `glint_arena_destroy`).
+pub(crate) unsafe fn closure_handle<'a>(
+    p: *const glint_closure,
+    what: &str,
+) -> Result<&'a glint_closure, Error> {
+    let (slot, generation) = decode(p);
+    // SAFETY: forwarded contract; reset slots stay allocated, destroyed ones readable
+    // while quarantined.
+    let c = unsafe { deref(slot, what) }?;
+    check_closure_tag(&c.tag, generation, what)?;
+    c.runtime()?;
+    Ok(c)
+}
+
+/// As [`closure_handle`], for building.
+///
+/// # Safety
+/// As [`closure_handle`], and no other thread uses the closure.
+unsafe fn closure_handle_mut<'a>(p: *mut glint_closure) -> Result<&'a mut glint_closure, Error> {
+    // SAFETY: forwarded contract.
+    unsafe { closure_handle(p, "closure") }?;
+    // SAFETY: checked above; the caller guarantees exclusive use.
+    Ok(unsafe { &mut *decode(p).0.cast_mut() })
+}
+
+/// A live arena.
+///
+/// # Safety
+/// `p` is NULL or a handle from `glint_arena_create` (see `glint_arena_destroy`).
+unsafe fn arena_mut<'a>(p: *mut glint_arena) -> Result<&'a mut glint_arena, Error> {
+    // SAFETY: forwarded contract; destroyed shells stay readable while quarantined.
+    let a = unsafe { deref_mut(p, "arena") }?;
+    check_tag(&a.tag, ARENA_LIVE, ARENA_DEAD, "arena")?;
+    Ok(a)
+}
+
+impl glint_arena {
+    /// Poison the tag of every closure in the arena, then free them.
+    fn clear(&mut self, poison: u64) {
+        for slot in self.arena.iter() {
+            slot.tag.set(poison);
+        }
+        self.arena.reset();
     }
 }
 
@@ -55,6 +114,15 @@ impl Sized32 for glint_eval_result {
     }
 }
 
+impl Output for glint_eval_result {
+    fn failed(struct_size: u32) -> Self {
+        glint_eval_result {
+            struct_size,
+            ..Default::default()
+        }
+    }
+}
+
 /// Result of a sample. For SPECULAR samples, `value` is the reflected or
 /// transmitted fraction and `pdf` the discrete probability of the event.
 #[repr(C)]
@@ -84,6 +152,17 @@ impl Sized32 for glint_sample_result {
     }
 }
 
+impl Output for glint_sample_result {
+    /// Zeroed, with the neutral `eta` = 1.
+    fn failed(struct_size: u32) -> Self {
+        glint_sample_result {
+            struct_size,
+            eta: 1.0,
+            ..Default::default()
+        }
+    }
+}
+
 pub(crate) fn vec3_in(v: glint_vec3, what: &str) -> Result<Vec3<f32>, Error> {
     Vec3::try_unit(v.x, v.y, v.z, what)
 }
@@ -97,10 +176,10 @@ fn vec3_out(v: Vec3<f32>) -> glint_vec3 {
 }
 
 /// # Safety
-/// `p` is NULL or a live closure handle.
+/// As [`closure_handle`].
 unsafe fn closure_ref<'a>(p: *const glint_closure) -> Result<&'a Closure, Error> {
     // SAFETY: forwarded contract.
-    Ok(&unsafe { deref(p, "closure") }?.closure)
+    Ok(&unsafe { closure_handle(p, "closure") }?.closure)
 }
 
 /// Create an arena with room for `capacity` closures.
@@ -114,38 +193,66 @@ pub unsafe extern "C" fn glint_arena_create(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { deref_mut(out, "out") }?;
-        *out = std::ptr::null_mut();
+        let out = unsafe { out_value(out, "out", std::ptr::null_mut()) }?;
         let arena = Arena::new(capacity)?;
-        *out = Box::into_raw(Box::new(glint_arena { arena }));
+        *out = Box::into_raw(Box::new(glint_arena {
+            tag: Tag::new(ARENA_LIVE),
+            generation: 0,
+            arena,
+        }));
         Ok(())
     })
 }
 
-/// Free every closure of the arena at once; their handles become invalid.
+/// Free every closure of the arena at once. Their handles become invalid, and any
+/// call with one returns `GLINT_ERROR_INVALID_HANDLE`, also after a new closure
+/// reuses the slot (each handle carries the arena's reset count modulo 65536, so
+/// only a handle from exactly a multiple of 65536 resets ago goes undetected).
 ///
 /// # Safety
-/// `arena` is NULL or a live arena handle.
+/// `arena` is NULL or a handle from `glint_arena_create` (see `glint_arena_destroy`).
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_arena_reset(arena: *mut glint_arena) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        unsafe { deref_mut(arena, "arena") }?.arena.reset();
+        let a = unsafe { arena_mut(arena) }?;
+        a.clear(CLOSURE_RESET);
+        a.generation = a.generation.wrapping_add(1);
         Ok(())
     })
 }
 
-/// Destroy an arena and its closures (NULL is ignored).
+/// Destroy an arena and its closures (NULL is ignored). Afterwards a call with the
+/// arena or one of its closures returns `GLINT_ERROR_INVALID_HANDLE`, and destroying
+/// it again is ignored and leaves that message for `glint_last_error`. This holds
+/// while the arena is quarantined: its shell until `QUARANTINE_SHELLS` (1024) more
+/// runtimes and arenas were destroyed, its closure slots while the most recently
+/// destroyed arenas' slots total at most `QUARANTINE_BYTES` (16 MiB; an arena larger
+/// than that frees them at once). Beyond that, for pointers never returned by this
+/// library and for calls that race with the destroy, the behaviour is undefined.
 ///
 /// # Safety
-/// `arena` is NULL or a handle from `glint_arena_create` not yet destroyed.
+/// `arena` is NULL or a handle from `glint_arena_create`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_arena_destroy(arena: *mut glint_arena) {
     guard(|| {
-        if !arena.is_null() {
-            // SAFETY: created by Box::into_raw in glint_arena_create, destroyed once.
-            drop(unsafe { Box::from_raw(arena) });
+        if arena.is_null() {
+            return Ok(());
         }
+        // SAFETY: a handle from glint_arena_create, live or quarantined.
+        let a = unsafe { &mut *arena };
+        check_tag(&a.tag, ARENA_LIVE, ARENA_DEAD, "arena")
+            .map_err(|e| invalid(format!("glint_arena_destroy ignored: {}", e.message)))?;
+        a.tag.set(ARENA_DEAD);
+        a.clear(CLOSURE_DEAD);
+        let mut bytes = a.arena.capacity() * std::mem::size_of::<glint_closure>();
+        if bytes > QUARANTINE_BYTES {
+            a.arena.release();
+            bytes = 0;
+        }
+        // SAFETY: created by Box::into_raw in glint_arena_create; the tag is now dead,
+        // so no later call takes ownership again.
+        quarantine(unsafe { Box::from_raw(arena) }, bytes);
         Ok(())
     });
 }
@@ -173,12 +280,12 @@ unsafe fn constructor_args<'a>(
     out: *mut *mut glint_closure,
 ) -> Result<ConstructorArgs<'a>, Error> {
     // SAFETY: per the contract.
-    let out = unsafe { deref_mut(out, "out") }?;
-    *out = std::ptr::null_mut();
+    let out = unsafe { out_value(out, "out", std::ptr::null_mut()) }?;
     // SAFETY: per the contract.
     let runtime = unsafe { deref(runtime, "runtime") }?;
+    runtime.live()?;
     // SAFETY: per the contract.
-    let arena = unsafe { deref_mut(arena, "arena") }?;
+    let arena = unsafe { arena_mut(arena) }?;
     // SAFETY: per the contract.
     let wo = unsafe { wo.as_ref() }
         .map(|w| vec3_in(*w, "wo"))
@@ -205,8 +312,13 @@ fn place(
     closure: Closure,
     out: &mut *mut glint_closure,
 ) -> Result<(), Error> {
-    let slot = arena.arena.alloc(glint_closure { closure, runtime })?;
-    *out = slot;
+    let generation = arena.generation;
+    let slot = arena.arena.alloc(glint_closure {
+        tag: Tag::new(closure_tag(generation)),
+        closure,
+        runtime,
+    })?;
+    *out = encode(slot, generation)?;
     Ok(())
 }
 
@@ -255,8 +367,13 @@ pub unsafe extern "C" fn glint_closure_add_lobe(
     out_index: *mut u32,
 ) -> glint_status {
     guard(|| {
+        // SAFETY: NULL or writable per the contract.
+        let out_index = unsafe { out_index.as_mut() }.map(|i| {
+            *i = 0;
+            i
+        });
         // SAFETY: per the contract.
-        let c = unsafe { deref_mut(closure, "closure") }?;
+        let c = unsafe { closure_handle_mut(closure) }?;
         if weight.is_null() {
             return Err(null("weight"));
         }
@@ -277,18 +394,12 @@ pub unsafe extern "C" fn glint_closure_add_lobe(
             // SAFETY: non-NULL and `param_count` floats per the contract.
             (false, n) => Some(unsafe { std::slice::from_raw_parts(params, n) }),
         };
-        // SAFETY: the runtime outlives its closures (documented contract of glint_runtime_destroy).
-        let rt = unsafe { deref(c.runtime, "closure's runtime") }?;
-        let index = c.closure.add_lobe(
-            &rt.runtime.registry,
-            type_id,
-            weight,
-            Frame::new(n, tangent),
-            params,
-        )?;
-        if !out_index.is_null() {
-            // SAFETY: non-NULL and writable per the contract.
-            unsafe { *out_index = index as u32 };
+        let registry = &c.runtime()?.runtime.registry;
+        let index =
+            c.closure
+                .add_lobe(registry, type_id, weight, Frame::new(n, tangent), params)?;
+        if let Some(i) = out_index {
+            *i = index as u32;
         }
         Ok(())
     })
@@ -303,7 +414,7 @@ pub unsafe extern "C" fn glint_closure_add_lobe(
 pub unsafe extern "C" fn glint_closure_finish(closure: *mut glint_closure) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        unsafe { deref_mut(closure, "closure") }?.closure.finish()
+        unsafe { closure_handle_mut(closure) }?.closure.finish()
     })
 }
 
@@ -325,7 +436,7 @@ pub unsafe extern "C" fn glint_closure_from_json(
         let a = unsafe { constructor_args(runtime, arena, wo, out) }?;
         // SAFETY: per the contract.
         let text = unsafe { c_str(json_text, "json_text") }?;
-        let closure = json::closure_from_json(&a.runtime.runtime.registry, text, a.wo)?;
+        let closure = json::closure_from_json(&a.runtime.live()?.runtime.registry, text, a.wo)?;
         place(a.runtime, a.arena, closure, a.out)
     })
 }
@@ -341,9 +452,11 @@ pub unsafe extern "C" fn glint_closure_lobe_count(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let c = unsafe { closure_ref(closure) }?;
+        let out = unsafe { out_value(out, "out", 0) }?;
         // SAFETY: per the contract.
-        unsafe { write_out(out, "out", c.lobes().len() as u32) }
+        let c = unsafe { closure_ref(closure) }?;
+        *out = c.lobes().len() as u32;
+        Ok(())
     })
 }
 
@@ -359,8 +472,22 @@ pub unsafe extern "C" fn glint_closure_lobe(
     probability: *mut f32,
 ) -> glint_status {
     guard(|| {
+        // SAFETY: per the contract (both are reset before either is reported NULL).
+        let (type_id, probability) = unsafe {
+            (
+                out_value(type_id, "type_id", 0),
+                out_value(probability, "probability", 0.0),
+            )
+        };
+        let (type_id, probability) = (type_id?, probability?);
         // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
+        c.check_finished().map_err(|_| {
+            Error::new(
+                Status::InvalidState,
+                "the closure is not finished: selection probabilities exist after glint_closure_finish",
+            )
+        })?;
         let l = c.lobes().get(index as usize).ok_or_else(|| {
             Error::new(
                 Status::OutOfRange,
@@ -370,18 +497,8 @@ pub unsafe extern "C" fn glint_closure_lobe(
                 ),
             )
         })?;
-        if type_id.is_null() || probability.is_null() {
-            return Err(null(if type_id.is_null() {
-                "type_id"
-            } else {
-                "probability"
-            }));
-        }
-        // SAFETY: both non-NULL and writable per the contract.
-        unsafe {
-            *type_id = l.type_id;
-            *probability = l.probability;
-        }
+        *type_id = l.type_id;
+        *probability = l.probability;
         Ok(())
     })
 }
@@ -395,19 +512,9 @@ fn write_eval(out: &mut glint_eval_result, r: EvalResult) {
     };
 }
 
-fn write_sample(
-    out: &mut glint_sample_result,
-    r: Result<SampleResult, Error>,
-) -> Result<(), Error> {
-    let size = out.struct_size;
+fn write_sample(out: &mut glint_sample_result, s: SampleResult) {
     *out = glint_sample_result {
-        struct_size: size,
-        eta: 1.0,
-        ..Default::default()
-    };
-    let s = r?;
-    *out = glint_sample_result {
-        struct_size: size,
+        struct_size: out.struct_size,
         wi: vec3_out(s.wi),
         value: s.value.to_array(),
         pdf: s.pdf,
@@ -417,16 +524,15 @@ fn write_sample(
         eta: s.eta,
         roughness: s.roughness,
     };
-    Ok(())
 }
 
-fn write_rgb(out: *mut f32, value: Rgb<f32>) -> Result<(), Error> {
-    if out.is_null() {
-        return Err(null("out"));
-    }
-    // SAFETY: non-NULL; the API documents `out` as 3 writable floats.
-    unsafe { std::ptr::write(out as *mut [f32; 3], value.to_array()) };
-    Ok(())
+/// The 3 floats at `out`, zeroed (the failure state) before the call does anything else.
+///
+/// # Safety
+/// `out` is NULL or 3 writable floats.
+unsafe fn out_rgb<'a>(out: *mut f32) -> Result<&'a mut [f32; 3], Error> {
+    // SAFETY: forwarded contract.
+    unsafe { out_value(out.cast::<[f32; 3]>(), "out", [0.0; 3]) }
 }
 
 /// The closure at `(wo, wi)`: `sum_k weight_k f_k |cos theta_i|`, the mixture pdf
@@ -443,9 +549,9 @@ pub unsafe extern "C" fn glint_eval(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let c = unsafe { closure_ref(closure) }?;
-        // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
         write_eval(out, c.eval(vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?);
         Ok(())
     })
@@ -468,13 +574,11 @@ pub unsafe extern "C" fn glint_sample(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let c = unsafe { closure_ref(closure) }?;
-        // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
-        write_sample(
-            out,
-            vec3_in(wo, "wo").and_then(|wo| c.sample(wo, [u_lobe, u0, u1])),
-        )
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
+        write_sample(out, c.sample(vec3_in(wo, "wo")?, [u_lobe, u0, u1])?);
+        Ok(())
     })
 }
 
@@ -491,10 +595,12 @@ pub unsafe extern "C" fn glint_pdf(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
+        let out = unsafe { out_value(out, "out", 0.0) }?;
+        // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
         let pdf = c.pdf(vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?;
-        // SAFETY: per the contract.
-        unsafe { write_out(out, "out", pdf) }
+        *out = pdf;
+        Ok(())
     })
 }
 
@@ -510,8 +616,11 @@ pub unsafe extern "C" fn glint_albedo(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
+        let out = unsafe { out_rgb(out) }?;
+        // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
-        write_rgb(out, c.albedo(vec3_in(wo, "wo")?)?)
+        *out = c.albedo(vec3_in(wo, "wo")?)?.to_array();
+        Ok(())
     })
 }
 
@@ -529,9 +638,9 @@ pub unsafe extern "C" fn glint_eval_lobe(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let c = unsafe { closure_ref(closure) }?;
-        // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
         write_eval(
             out,
             c.eval_lobe(lobe as usize, vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?,
@@ -557,13 +666,14 @@ pub unsafe extern "C" fn glint_sample_lobe(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let c = unsafe { closure_ref(closure) }?;
-        // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
+        // SAFETY: per the contract.
+        let c = unsafe { closure_ref(closure) }?;
         write_sample(
             out,
-            c.sample_lobe(lobe as usize, vec3_in(wo, "wo")?, [u_c, u0, u1]),
-        )
+            c.sample_lobe(lobe as usize, vec3_in(wo, "wo")?, [u_c, u0, u1])?,
+        );
+        Ok(())
     })
 }
 
@@ -581,10 +691,12 @@ pub unsafe extern "C" fn glint_pdf_lobe(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
+        let out = unsafe { out_value(out, "out", 0.0) }?;
+        // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
         let pdf = c.pdf_lobe(lobe as usize, vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?;
-        // SAFETY: per the contract.
-        unsafe { write_out(out, "out", pdf) }
+        *out = pdf;
+        Ok(())
     })
 }
 
@@ -601,7 +713,10 @@ pub unsafe extern "C" fn glint_albedo_lobe(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
+        let out = unsafe { out_rgb(out) }?;
+        // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
-        write_rgb(out, c.albedo_lobe(lobe as usize, vec3_in(wo, "wo")?)?)
+        *out = c.albedo_lobe(lobe as usize, vec3_in(wo, "wo")?)?.to_array();
+        Ok(())
     })
 }

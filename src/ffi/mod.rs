@@ -9,18 +9,27 @@
 
 mod batch;
 mod closure;
+mod handle;
 mod runtime;
 
 pub use batch::*;
 pub use closure::*;
+pub use handle::{QUARANTINE_BYTES, QUARANTINE_SHELLS};
 pub use runtime::*;
 
 use crate::error::{Error, Status};
+use handle::*;
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-/// A status code: 0 (`GLINT_OK`) on success.
+/// A status code: 0 (`GLINT_OK`) on success. A failing call (any status but
+/// `GLINT_OK`, including `GLINT_NO_SAMPLE`) leaves every output it was given in one
+/// state, set before anything else is checked: output handles NULL, numbers and ids
+/// 0, strings NULL, float arrays zeroed, result and info structs zeroed except
+/// `struct_size` (and `glint_sample_result.eta` = 1). A NULL output, or a struct whose
+/// `struct_size` is too small, is not written. Batch calls zero the outputs of invalid
+/// lanes (see `glint_eval_batch`). A failing builder call leaves its closure unchanged.
 pub type glint_status = u32;
 
 pub const GLINT_OK: glint_status = 0;
@@ -45,6 +54,9 @@ pub const GLINT_ERROR_PLUGIN_ABI_REFUSED: glint_status = 16;
 pub const GLINT_ERROR_DUPLICATE_NAME: glint_status = 17;
 pub const GLINT_ERROR_PLUGIN_PARAMS: glint_status = 18;
 pub const GLINT_ERROR_PLUGIN_BLOCK_SIZE: glint_status = 19;
+/// A runtime, arena or closure handle that was destroyed, reset (closures of a reset
+/// arena) or belongs to a destroyed runtime; see `glint_runtime_destroy`.
+pub const GLINT_ERROR_INVALID_HANDLE: glint_status = 20;
 
 pub const GLINT_VERSION_MAJOR: u32 = 0;
 pub const GLINT_VERSION_MINOR: u32 = 1;
@@ -154,6 +166,12 @@ trait Sized32 {
     fn struct_size(&self) -> u32;
 }
 
+/// Output structs, which a failing call leaves in one state.
+trait Output: Sized32 {
+    /// The failure state: zeroed (NULL strings) except `struct_size`.
+    fn failed(struct_size: u32) -> Self;
+}
+
 /// Check that a caller's struct is at least as large as this library's version of it.
 fn check_size<T: Sized32>(s: &T, what: &str) -> Result<(), Error> {
     let need = std::mem::size_of::<T>();
@@ -169,25 +187,30 @@ fn check_size<T: Sized32>(s: &T, what: &str) -> Result<(), Error> {
     Ok(())
 }
 
-/// Output pointer to a struct that begins with `struct_size`, checked.
+/// Output pointer to a struct that begins with `struct_size`, checked and set to its
+/// failure state before the call does anything else (a NULL or too small struct is
+/// not written).
 ///
 /// # Safety
 /// As [`deref_mut`].
-unsafe fn out_struct<'a, T: Sized32>(p: *mut T, what: &str) -> Result<&'a mut T, Error> {
+unsafe fn out_struct<'a, T: Output>(p: *mut T, what: &str) -> Result<&'a mut T, Error> {
     // SAFETY: forwarded contract.
     let s = unsafe { deref_mut(p, what) }?;
     check_size(s, what)?;
+    *s = T::failed(s.struct_size());
     Ok(s)
 }
 
-/// Write `value` through an output pointer.
+/// Output pointer, set to `failed` (what a failing call leaves) before the call does
+/// anything else.
 ///
 /// # Safety
 /// `p` is NULL or valid for writes.
-unsafe fn write_out<T>(p: *mut T, what: &str, value: T) -> Result<(), Error> {
+unsafe fn out_value<'a, T>(p: *mut T, what: &str, failed: T) -> Result<&'a mut T, Error> {
     // SAFETY: forwarded contract.
-    *unsafe { deref_mut(p, what) }? = value;
-    Ok(())
+    let out = unsafe { deref_mut(p, what) }?;
+    *out = failed;
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -210,7 +233,16 @@ mod tests {
             GLINT_ERROR_UNSUPPORTED,
             GLINT_NO_SAMPLE,
             GLINT_ERROR_PANIC,
+            GLINT_ERROR_PLUGIN_NOT_FOUND,
+            GLINT_ERROR_PLUGIN_NOT_LIBRARY,
+            GLINT_ERROR_PLUGIN_NO_ENTRY,
+            GLINT_ERROR_PLUGIN_ABI_REFUSED,
+            GLINT_ERROR_DUPLICATE_NAME,
+            GLINT_ERROR_PLUGIN_PARAMS,
+            GLINT_ERROR_PLUGIN_BLOCK_SIZE,
+            GLINT_ERROR_INVALID_HANDLE,
         ];
+        assert_eq!(c.len(), Status::ALL.len());
         for (s, c) in Status::ALL.iter().zip(c) {
             assert_eq!(*s as u32, c, "{s:?}");
         }

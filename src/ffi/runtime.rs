@@ -22,22 +22,49 @@ fn c_string(s: &str) -> CString {
     CString::new(s.replace('\0', " ")).unwrap_or_default()
 }
 
-/// The runtime handle: owns the registry and settings. Read-only after setup.
+/// The runtime handle: a small shell (see `handle`) around what the runtime owns.
 pub struct glint_runtime {
+    tag: Tag,
+    /// `None` once destroyed.
+    live: Option<Box<LiveRuntime>>,
+}
+
+/// What a live runtime owns: the registry and settings. Read-only after setup.
+pub(crate) struct LiveRuntime {
     pub(crate) runtime: Runtime,
     strings: Vec<LobeStrings>,
 }
 
 impl glint_runtime {
     fn new(runtime: Runtime) -> Self {
-        let mut rt = glint_runtime {
+        let mut live = LiveRuntime {
             runtime,
             strings: Vec::new(),
         };
-        rt.cache_strings();
-        rt
+        live.cache_strings();
+        glint_runtime {
+            tag: Tag::new(RUNTIME_LIVE),
+            live: Some(Box::new(live)),
+        }
     }
 
+    /// The runtime's contents, or `GLINT_ERROR_INVALID_HANDLE` once destroyed.
+    pub(crate) fn live(&self) -> Result<&LiveRuntime, Error> {
+        check_tag(&self.tag, RUNTIME_LIVE, RUNTIME_DEAD, "runtime")?;
+        self.live
+            .as_deref()
+            .ok_or_else(|| invalid("runtime was destroyed".into()))
+    }
+
+    fn live_mut(&mut self) -> Result<&mut LiveRuntime, Error> {
+        check_tag(&self.tag, RUNTIME_LIVE, RUNTIME_DEAD, "runtime")?;
+        self.live
+            .as_deref_mut()
+            .ok_or_else(|| invalid("runtime was destroyed".into()))
+    }
+}
+
+impl LiveRuntime {
     /// C strings for lobe types registered since the last call. Existing strings
     /// never move (each `CString` owns its buffer), so pointers handed out stay valid.
     fn cache_strings(&mut self) {
@@ -61,6 +88,17 @@ impl glint_runtime {
     }
 }
 
+/// A live runtime from a handle the caller promises is NULL or from
+/// `glint_runtime_create` (destroyed handles are detected while quarantined).
+///
+/// # Safety
+/// `p` is NULL or a handle from `glint_runtime_create`, as documented on
+/// `glint_runtime_destroy`.
+pub(crate) unsafe fn runtime_ref<'a>(p: *const glint_runtime) -> Result<&'a LiveRuntime, Error> {
+    // SAFETY: forwarded contract; destroyed shells stay readable while quarantined.
+    unsafe { deref(p, "runtime") }?.live()
+}
+
 /// Description of a lobe type.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -81,6 +119,20 @@ pub struct glint_lobe_info {
 impl Sized32 for glint_lobe_info {
     fn struct_size(&self) -> u32 {
         self.struct_size
+    }
+}
+
+impl Output for glint_lobe_info {
+    fn failed(struct_size: u32) -> Self {
+        glint_lobe_info {
+            struct_size,
+            name: std::ptr::null(),
+            summary: std::ptr::null(),
+            flags: 0,
+            reciprocal: 0,
+            param_count: 0,
+            param_block_size: 0,
+        }
     }
 }
 
@@ -111,6 +163,24 @@ pub struct glint_param_info {
 impl Sized32 for glint_param_info {
     fn struct_size(&self) -> u32 {
         self.struct_size
+    }
+}
+
+impl Output for glint_param_info {
+    fn failed(struct_size: u32) -> Self {
+        glint_param_info {
+            struct_size,
+            name: std::ptr::null(),
+            param_type: 0,
+            offset: 0,
+            size: 0,
+            default_value: [0.0; 3],
+            min: 0.0,
+            max: 0.0,
+            choice_count: 0,
+            choices: std::ptr::null(),
+            doc: std::ptr::null(),
+        }
     }
 }
 
@@ -166,17 +236,31 @@ pub unsafe extern "C" fn glint_runtime_create(
 }
 
 /// Destroy a runtime (NULL is ignored). Arenas and closures made with it must not be
-/// used afterwards.
+/// used afterwards: closure calls then return `GLINT_ERROR_INVALID_HANDLE`, as does a
+/// call on the destroyed runtime; destroying it again is ignored and leaves that
+/// message for `glint_last_error`. This holds while the handle's small shell is
+/// quarantined, that is until `QUARANTINE_SHELLS` (1024) more runtimes and arenas
+/// were destroyed; after that, and for pointers never returned by
+/// `glint_runtime_create`, the behaviour is undefined, as is a call that races with
+/// the destroy.
 ///
 /// # Safety
-/// `runtime` is NULL or a handle from `glint_runtime_create` not yet destroyed.
+/// `runtime` is NULL or a handle from `glint_runtime_create`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_runtime_destroy(runtime: *mut glint_runtime) {
     guard(|| {
-        if !runtime.is_null() {
-            // SAFETY: created by Box::into_raw in glint_runtime_create, destroyed once.
-            drop(unsafe { Box::from_raw(runtime) });
+        if runtime.is_null() {
+            return Ok(());
         }
+        // SAFETY: a handle from glint_runtime_create, live or quarantined.
+        let rt = unsafe { &mut *runtime };
+        check_tag(&rt.tag, RUNTIME_LIVE, RUNTIME_DEAD, "runtime")
+            .map_err(|e| invalid(format!("glint_runtime_destroy ignored: {}", e.message)))?;
+        rt.tag.set(RUNTIME_DEAD);
+        rt.live = None;
+        // SAFETY: created by Box::into_raw in glint_runtime_create; the tag is now
+        // dead, so no later call takes ownership again.
+        quarantine(unsafe { Box::from_raw(runtime) }, 0);
         Ok(())
     });
 }
@@ -193,14 +277,16 @@ pub unsafe extern "C" fn glint_runtime_isa(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
+        let out = unsafe { out_value(out, "out", std::ptr::null()) }?;
+        // SAFETY: per the contract.
+        let rt = unsafe { runtime_ref(runtime) }?;
         let name = match rt.runtime.kernels().isa() {
             Isa::Scalar => c"scalar",
             Isa::Avx2 => c"avx2",
             Isa::Avx512 => c"avx512",
         };
-        // SAFETY: per the contract.
-        unsafe { write_out(out, "out", name.as_ptr()) }
+        *out = name.as_ptr();
+        Ok(())
     })
 }
 
@@ -220,7 +306,7 @@ pub unsafe extern "C" fn glint_runtime_load_plugin(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref_mut(runtime, "runtime") }?;
+        let rt = unsafe { deref_mut(runtime, "runtime") }?.live_mut()?;
         // SAFETY: per the contract.
         let path = unsafe { c_str(path, "path") }?;
         rt.runtime.load_plugin(std::path::Path::new(path))?;
@@ -243,10 +329,12 @@ pub unsafe extern "C" fn glint_lobe_sanitized_count(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
-        let count = rt.runtime.registry.get(type_id)?.sanitized_count();
+        let out = unsafe { out_value(out, "out", 0) }?;
         // SAFETY: per the contract.
-        unsafe { write_out(out, "out", count) }
+        let rt = unsafe { runtime_ref(runtime) }?;
+        let count = rt.runtime.registry.get(type_id)?.sanitized_count();
+        *out = count;
+        Ok(())
     })
 }
 
@@ -261,9 +349,11 @@ pub unsafe extern "C" fn glint_lobe_type_count(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
+        let out = unsafe { out_value(out, "out", 0) }?;
         // SAFETY: per the contract.
-        unsafe { write_out(out, "out", rt.runtime.registry.len() as u32) }
+        let rt = unsafe { runtime_ref(runtime) }?;
+        *out = rt.runtime.registry.len() as u32;
+        Ok(())
     })
 }
 
@@ -279,12 +369,14 @@ pub unsafe extern "C" fn glint_lobe_type_find(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
+        let out = unsafe { out_value(out, "out", 0) }?;
+        // SAFETY: per the contract.
+        let rt = unsafe { runtime_ref(runtime) }?;
         // SAFETY: per the contract.
         let name = unsafe { c_str(name, "name") }?;
         let id = rt.runtime.registry.find(name)?;
-        // SAFETY: per the contract.
-        unsafe { write_out(out, "out", id) }
+        *out = id;
+        Ok(())
     })
 }
 
@@ -300,9 +392,9 @@ pub unsafe extern "C" fn glint_lobe_type_info(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
-        // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "info") }?;
+        // SAFETY: per the contract.
+        let rt = unsafe { runtime_ref(runtime) }?;
         let t = rt.runtime.registry.get(id)?;
         let s = &rt.strings[id as usize];
         *out = glint_lobe_info {
@@ -331,9 +423,9 @@ pub unsafe extern "C" fn glint_lobe_param_info(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
-        // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "info") }?;
+        // SAFETY: per the contract.
+        let rt = unsafe { runtime_ref(runtime) }?;
         let t = rt.runtime.registry.get(id)?;
         let specs = t.params();
         let spec = specs.get(index as usize).ok_or_else(|| {
@@ -381,7 +473,9 @@ pub unsafe extern "C" fn glint_lobe_param_find(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
+        let out = unsafe { out_value(out, "out", 0) }?;
+        // SAFETY: per the contract.
+        let rt = unsafe { runtime_ref(runtime) }?;
         // SAFETY: per the contract.
         let name = unsafe { c_str(name, "name") }?;
         let t = rt.runtime.registry.get(id)?;
@@ -400,8 +494,8 @@ pub unsafe extern "C" fn glint_lobe_param_find(
                     ),
                 )
             })?;
-        // SAFETY: per the contract.
-        unsafe { write_out(out, "out", index as u32) }
+        *out = index as u32;
+        Ok(())
     })
 }
 
@@ -420,7 +514,9 @@ pub unsafe extern "C" fn glint_lobe_param_choice(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
+        let out = unsafe { out_value(out, "out", 0.0) }?;
+        // SAFETY: per the contract.
+        let rt = unsafe { runtime_ref(runtime) }?;
         // SAFETY: per the contract.
         let choice = unsafe { c_str(choice, "choice") }?;
         let t = rt.runtime.registry.get(id)?;
@@ -437,8 +533,8 @@ pub unsafe extern "C" fn glint_lobe_param_choice(
             ));
         }
         let value = spec.choice_index(t.name(), choice)? as f32;
-        // SAFETY: per the contract.
-        unsafe { write_out(out, "out", value) }
+        *out = value;
+        Ok(())
     })
 }
 
@@ -455,22 +551,23 @@ pub unsafe extern "C" fn glint_lobe_param_defaults(
     capacity: usize,
 ) -> glint_status {
     guard(|| {
-        // SAFETY: per the contract.
-        let rt = unsafe { deref(runtime, "runtime") }?;
-        let t = rt.runtime.registry.get(id)?;
-        let size = params::block_size(t.params());
         if out.is_null() {
             return Err(null("out"));
         }
+        // SAFETY: non-NULL and valid for `capacity` floats per the contract.
+        let out = unsafe { std::slice::from_raw_parts_mut(out, capacity) };
+        out.fill(0.0);
+        // SAFETY: per the contract.
+        let rt = unsafe { runtime_ref(runtime) }?;
+        let t = rt.runtime.registry.get(id)?;
+        let size = params::block_size(t.params());
         if capacity < size {
             return Err(Error::new(
                 Status::OutOfRange,
                 format!("{} needs {size} floats; capacity is {capacity}", t.name()),
             ));
         }
-        // SAFETY: non-NULL and valid for `capacity >= size` floats per the contract.
-        let out = unsafe { std::slice::from_raw_parts_mut(out, size) };
-        params::write_defaults(t.params(), out);
+        params::write_defaults(t.params(), &mut out[..size]);
         Ok(())
     })
 }

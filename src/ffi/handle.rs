@@ -1,0 +1,202 @@
+//! Handle validation: every runtime, arena and closure handle carries a tag that API
+//! entry points compare (one load and one compare) and that destroy and reset poison.
+//!
+//! - Runtime and arena handles point to small shells. Destroy frees what they own,
+//!   poisons the tag and parks the shell in a bounded global [quarantine], so a
+//!   destroyed handle stays readable (and reads as destroyed) for a while instead of
+//!   becoming freed memory at once.
+//! - A closure handle is the address of its arena slot with the arena's generation in
+//!   the 16 high bits, which x86-64 and AArch64 user-space addresses leave zero. The
+//!   slot's tag holds the generation it was built in, `glint_arena_reset` poisons the
+//!   live slots and bumps the generation, so a handle from before a reset never
+//!   matches, even when its slot holds a newer closure. Each closure call also checks
+//!   its runtime's tag.
+//!
+//! What stays undefined: pointers this library never returned; a destroyed runtime or
+//! arena handle used after [`QUARANTINE_SHELLS`] more runtimes and arenas were
+//! destroyed (its shell is then freed); closures of a destroyed arena whose slots
+//! exceeded [`QUARANTINE_BYTES`] or left the quarantine; a handle from exactly a
+//! multiple of 65536 resets ago whose slot was reused; and calls that race with the
+//! destroy or reset of the handle they use.
+
+use super::*;
+use std::any::Any;
+use std::collections::VecDeque;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Destroyed runtimes and arenas whose shells stay readable.
+pub const QUARANTINE_SHELLS: usize = 1024;
+/// Most bytes of closure slots that destroyed arenas keep in the quarantine.
+pub const QUARANTINE_BYTES: usize = 16 << 20;
+
+pub(crate) const RUNTIME_LIVE: u64 = u64::from_be_bytes(*b"GLRTLIVE");
+pub(crate) const RUNTIME_DEAD: u64 = u64::from_be_bytes(*b"GLRTDEAD");
+pub(crate) const ARENA_LIVE: u64 = u64::from_be_bytes(*b"GLARLIVE");
+pub(crate) const ARENA_DEAD: u64 = u64::from_be_bytes(*b"GLARDEAD");
+/// A live closure slot: these 48 bits, then the 16-bit generation it was built in.
+const CLOSURE_LIVE: u64 = u64::from_be_bytes(*b"GLCLLV\0\0");
+/// A slot freed by `glint_arena_reset` (not yet reused).
+pub(crate) const CLOSURE_RESET: u64 = u64::from_be_bytes(*b"GLCLRSET");
+/// A slot of a destroyed arena.
+pub(crate) const CLOSURE_DEAD: u64 = u64::from_be_bytes(*b"GLCLDEAD");
+
+const GENERATION_SHIFT: u32 = 48;
+const ADDRESS_MASK: usize = (1 << GENERATION_SHIFT) - 1;
+const _: () = assert!(usize::BITS == 64, "closure handles need 64-bit pointers");
+
+/// A handle's tag; atomic so that a checking thread never races a plain write.
+pub(crate) struct Tag(AtomicU64);
+
+impl Tag {
+    pub(crate) const fn new(value: u64) -> Self {
+        Tag(AtomicU64::new(value))
+    }
+
+    pub(crate) fn get(&self) -> u64 {
+        self.0.load(Ordering::Relaxed)
+    }
+
+    pub(crate) fn set(&self, value: u64) {
+        self.0.store(value, Ordering::Relaxed);
+    }
+}
+
+pub(crate) fn invalid(message: String) -> Error {
+    Error::new(Status::InvalidHandle, message)
+}
+
+/// Why a runtime or arena tag is not `live`.
+pub(crate) fn check_tag(tag: &Tag, live: u64, dead: u64, what: &str) -> Result<(), Error> {
+    match tag.get() {
+        t if t == live => Ok(()),
+        t if t == dead => Err(invalid(format!("{what} was destroyed"))),
+        _ => Err(invalid(format!(
+            "{what} is not a {what} handle (another kind of handle, or freed memory)"
+        ))),
+    }
+}
+
+/// The tag of a closure slot built in `generation`.
+pub(crate) fn closure_tag(generation: u16) -> u64 {
+    CLOSURE_LIVE | u64::from(generation)
+}
+
+/// The handle of the closure in `slot`, built in `generation`.
+pub(crate) fn encode<T>(slot: *mut T, generation: u16) -> Result<*mut T, Error> {
+    if slot.addr() & !ADDRESS_MASK != 0 {
+        return Err(Error::new(
+            Status::Unsupported,
+            format!(
+                "closure slot address {:#x} does not fit in 48 bits",
+                slot.addr()
+            ),
+        ));
+    }
+    Ok(slot.map_addr(|a| a | usize::from(generation) << GENERATION_SHIFT))
+}
+
+/// The slot a closure handle points to and the generation it carries.
+pub(crate) fn decode<T>(handle: *const T) -> (*const T, u16) {
+    let generation = (handle.addr() >> GENERATION_SHIFT) as u16;
+    (handle.map_addr(|a| a & ADDRESS_MASK), generation)
+}
+
+/// Check a closure slot's tag against the generation of the handle that led to it.
+pub(crate) fn check_closure_tag(tag: &Tag, generation: u16, what: &str) -> Result<(), Error> {
+    match tag.get() {
+        t if t == closure_tag(generation) => Ok(()),
+        t if t & !0xffff == CLOSURE_LIVE => Err(invalid(format!(
+            "{what} is stale: its arena was reset and the slot now holds a newer closure"
+        ))),
+        CLOSURE_RESET => Err(invalid(format!("{what} is stale: its arena was reset"))),
+        CLOSURE_DEAD => Err(invalid(format!("{what} belongs to a destroyed arena"))),
+        _ => Err(invalid(format!(
+            "{what} is not a closure handle (another kind of handle, or freed memory)"
+        ))),
+    }
+}
+
+/// A destroyed runtime or arena shell, kept readable while quarantined, with the
+/// bytes of closure slots it keeps.
+struct Parked {
+    _shell: Box<dyn Any>,
+    bytes: usize,
+}
+
+struct Quarantine {
+    shells: VecDeque<Parked>,
+    bytes: usize,
+}
+
+// SAFETY: quarantined shells are dead: no thread uses them through the API (a use is
+// a read of their poisoned tag), and the quarantine only drops them.
+unsafe impl Send for Quarantine {}
+
+/// Reachable from a global, so leak checkers count parked shells as still reachable.
+static QUARANTINE: Mutex<Quarantine> = Mutex::new(Quarantine {
+    shells: VecDeque::new(),
+    bytes: 0,
+});
+
+/// Park a destroyed shell that keeps `bytes` of closure slots; the oldest leave
+/// (and are freed) beyond the bounds.
+pub(crate) fn quarantine(shell: Box<dyn Any>, bytes: usize) {
+    let mut q = QUARANTINE.lock().unwrap_or_else(|e| e.into_inner());
+    q.bytes += bytes;
+    q.shells.push_back(Parked {
+        _shell: shell,
+        bytes,
+    });
+    while q.shells.len() > QUARANTINE_SHELLS || q.bytes > QUARANTINE_BYTES {
+        let Some(old) = q.shells.pop_front() else {
+            break;
+        };
+        q.bytes -= old.bytes;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_handle_carries_its_generation_and_decodes_to_its_slot() {
+        let mut slot = 0u64;
+        let p: *mut u64 = &mut slot;
+        for generation in [0, 1, 0x1234, u16::MAX] {
+            let h = encode(p, generation).unwrap();
+            assert_eq!(decode(h.cast_const()), (p.cast_const(), generation));
+        }
+        assert_ne!(encode(p, 1).unwrap(), encode(p, 2).unwrap());
+    }
+
+    #[test]
+    fn a_slot_tag_accepts_only_its_own_generation() {
+        let tag = Tag::new(closure_tag(7));
+        assert!(check_closure_tag(&tag, 7, "c").is_ok());
+        let stale = check_closure_tag(&tag, 6, "c").unwrap_err();
+        assert_eq!(stale.status, Status::InvalidHandle);
+        assert!(stale.message.contains("newer closure"), "{}", stale.message);
+        for (poison, says) in [
+            (CLOSURE_RESET, "was reset"),
+            (CLOSURE_DEAD, "destroyed arena"),
+            (RUNTIME_LIVE, "not a closure handle"),
+        ] {
+            tag.set(poison);
+            let e = check_closure_tag(&tag, 7, "c").unwrap_err();
+            assert!(e.message.contains(says), "{}", e.message);
+        }
+    }
+
+    #[test]
+    fn the_quarantine_keeps_its_bounds() {
+        for _ in 0..QUARANTINE_SHELLS + 10 {
+            quarantine(Box::new(0u8), QUARANTINE_BYTES / 4);
+        }
+        let q = QUARANTINE.lock().unwrap();
+        assert!(q.shells.len() <= QUARANTINE_SHELLS);
+        assert!(q.bytes <= QUARANTINE_BYTES);
+        assert_eq!(q.bytes, q.shells.iter().map(|p| p.bytes).sum::<usize>());
+    }
+}
