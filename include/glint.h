@@ -53,6 +53,11 @@
 #define GLINT_PARAM_ENUM 2
 
 /*
+ Most lanes one batch call takes: lanes are indexed by 32-bit integers.
+ */
+#define GLINT_MAX_BATCH_COUNT 4294967295
+
+/*
  An arena of closures owned by the caller; one thread at a time.
  */
 typedef struct glint_arena glint_arena;

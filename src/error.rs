@@ -28,10 +28,12 @@ pub enum Status {
     DuplicateName = 17,
     PluginParams = 18,
     PluginBlockSize = 19,
+    /// 20 is `InvalidHandle` (added on the handles branch).
+    OutOfMemory = 21,
 }
 
 impl Status {
-    pub const ALL: [Status; 20] = [
+    pub const ALL: [Status; 21] = [
         Status::Ok,
         Status::NullPointer,
         Status::InvalidArgument,
@@ -52,6 +54,7 @@ impl Status {
         Status::DuplicateName,
         Status::PluginParams,
         Status::PluginBlockSize,
+        Status::OutOfMemory,
     ];
 
     /// A static description, NUL-terminated so the C API can hand it out as is.
@@ -83,6 +86,7 @@ impl Status {
             Status::PluginBlockSize => {
                 c"plugin parameter block size or alignment does not match its table"
             }
+            Status::OutOfMemory => c"out of memory: a buffer the call needs could not be allocated",
         }
     }
 }

@@ -45,6 +45,8 @@ pub const GLINT_ERROR_PLUGIN_ABI_REFUSED: glint_status = 16;
 pub const GLINT_ERROR_DUPLICATE_NAME: glint_status = 17;
 pub const GLINT_ERROR_PLUGIN_PARAMS: glint_status = 18;
 pub const GLINT_ERROR_PLUGIN_BLOCK_SIZE: glint_status = 19;
+/// Memory ran short (a batch's staging buffers could not grow).
+pub const GLINT_ERROR_OUT_OF_MEMORY: glint_status = 21;
 
 pub const GLINT_VERSION_MAJOR: u32 = 0;
 pub const GLINT_VERSION_MINOR: u32 = 1;
@@ -214,6 +216,7 @@ mod tests {
         for (s, c) in Status::ALL.iter().zip(c) {
             assert_eq!(*s as u32, c, "{s:?}");
         }
+        assert_eq!(Status::OutOfMemory as u32, GLINT_ERROR_OUT_OF_MEMORY);
         use crate::lobes::flags;
         assert_eq!(
             [
