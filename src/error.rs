@@ -29,6 +29,7 @@ pub enum Status {
     PluginParams = 18,
     PluginBlockSize = 19,
     InvalidHandle = 20,
+    OutOfMemory = 21,
 }
 
 impl Status {
@@ -54,6 +55,7 @@ impl Status {
         Status::PluginParams,
         Status::PluginBlockSize,
         Status::InvalidHandle,
+        Status::OutOfMemory,
     ];
 
     /// A static description, NUL-terminated so the C API can hand it out as is.
@@ -88,6 +90,7 @@ impl Status {
             Status::InvalidHandle => {
                 c"the handle was destroyed, reset or never created by this library"
             }
+            Status::OutOfMemory => c"out of memory: a buffer the call needs could not be allocated",
         }
     }
 }

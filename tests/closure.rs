@@ -8,7 +8,7 @@ mod common;
 mod reference;
 
 use common::{Block, Rng, assert_close, assert_close3, lobe};
-use glint::closure::MAX_LOBES;
+use glint::closure::{MAX_LOBE_WEIGHT, MAX_LOBES};
 use glint::lobes::{Transport, flags};
 use glint::math::{Frame, Rgb, Vec3};
 use glint::registry::Registry;
@@ -587,4 +587,98 @@ fn add_lobe_validates_its_arguments() {
     assert_eq!(e.status, Status::OutOfRange);
     assert!(e.message.contains("ggx, beckmann"), "{}", e.message);
     assert!(c.lobes().is_empty(), "failed adds leave nothing behind");
+}
+
+/// `count` lamberts (color 1) of weight `w`, normal +z.
+fn lamberts(count: usize, w: f32) -> Result<Closure, glint::Error> {
+    let registry = Registry::with_builtins();
+    let block = Block::defaults(lobe("lambert")).rgb("color", [1.0; 3]);
+    let mut c = Closure::new(None, Transport::Radiance);
+    for _ in 0..count {
+        c.add_lobe(
+            &registry,
+            id(&registry, "lambert"),
+            [w; 3],
+            Frame::new(Vec3::new(0.0, 0.0, 1.0), None),
+            Some(block.as_slice()),
+        )?;
+    }
+    c.finish()?;
+    Ok(c)
+}
+
+/// Eval, sample and albedo of a closure, for a failure message.
+fn describe(c: &Closure) -> String {
+    let wo = Vec3::new(0.3, 0.2, 0.9).normalize();
+    let wi = Vec3::new(-0.2, 0.1, 0.9).normalize();
+    format!(
+        "eval {:?}, sample {:?}, albedo {:?}",
+        c.eval(wo, wi),
+        c.sample(wo, [0.3, 0.6, 0.2]).map(|s| (s.pdf, s.weight)),
+        c.albedo(wo)
+    )
+}
+
+/// Weights beyond `MAX_LOBE_WEIGHT` are refused, from the Rust API and from JSON, with
+/// a message naming the bound (issue 12, D7: two lamberts at 3e38 gave NO_SAMPLE, a
+/// zero pdf with a nonzero value and an infinite albedo; sixteen at 1e38 an infinite
+/// eval).
+#[test]
+fn lobe_weights_above_the_bound_are_refused() {
+    let bound = format!("{:e}", MAX_LOBE_WEIGHT);
+    for (count, w) in [
+        (2, 3e38),
+        (16, 1e38),
+        (1, f32::MAX),
+        (1, MAX_LOBE_WEIGHT * 1.0001),
+    ] {
+        let e = match lamberts(count, w) {
+            Ok(c) => panic!("{count} lobes of weight {w:e} accepted: {}", describe(&c)),
+            Err(e) => e,
+        };
+        assert_eq!(e.status, Status::OutOfRange, "{}", e.message);
+        assert!(e.message.contains(&bound), "{}", e.message);
+        assert!(e.message.contains("weight[0]"), "{}", e.message);
+    }
+    let json = r#"{"lobes": [{"type": "lambert", "weight": [1, 3e38, 1]}]}"#;
+    let Err(e) = glint::json::closure_from_json(&Registry::with_builtins(), json, None) else {
+        panic!("JSON weight 3e38 accepted");
+    };
+    assert_eq!(e.status, Status::OutOfRange, "{}", e.message);
+    assert!(
+        e.message.contains(&bound) && e.message.contains("weight[1]"),
+        "{}",
+        e.message
+    );
+}
+
+/// A full closure at the largest weight stays finite and consistent: the f64 value of
+/// sixteen lamberts, `16 w cos_i / pi`, the pdf `cos_i / pi`, weight `16 w`.
+#[test]
+fn full_closures_at_the_largest_weight_stay_finite() {
+    let w = MAX_LOBE_WEIGHT;
+    let c = lamberts(MAX_LOBES, w).unwrap();
+    let (wo, wi) = (
+        Vec3::new(0.3, 0.2, 0.9).normalize(),
+        Vec3::new(-0.2, 0.1, 0.9).normalize(),
+    );
+    for l in c.lobes() {
+        assert_close(l.probability as f64, 1.0 / 16.0, 1e-6, 0.0, "probability");
+    }
+    let e = c.eval(wo, wi).unwrap();
+    let cos_pi = f64::from(wi.z) / PI;
+    let value = 16.0 * f64::from(w) * cos_pi;
+    assert_close3(e.value.to_array(), [value; 3], 1e-5, 0.0, "value");
+    assert_close(e.pdf as f64, cos_pi, 1e-5, 0.0, "pdf");
+    let s = c.sample(wo, [0.3, 0.6, 0.2]).unwrap();
+    let expected = 16.0 * f64::from(w);
+    assert_close3(
+        s.weight.to_array(),
+        [expected; 3],
+        1e-5,
+        0.0,
+        "sample weight",
+    );
+    let albedo = c.albedo(wo).unwrap();
+    assert_close3(albedo.to_array(), [expected; 3], 1e-5, 0.0, "albedo");
 }

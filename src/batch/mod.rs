@@ -15,15 +15,14 @@
 
 mod stage;
 
-use crate::closure::{Closure, ONE_MINUS_EPSILON, SampleResult};
-use crate::error::Error;
+use crate::closure::{Closure, ONE_MINUS_EPSILON, SampleResult, sample_weight};
+use crate::error::{Error, Status};
 use crate::lobes::flags;
 use crate::math::{Rgb, Vec3};
 use crate::simd::Kernels;
 use crate::simd::kernels::{
     AlbedoJob, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob, SampleJob,
 };
-use rayon::prelude::*;
 use stage::{Randoms, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch};
 
 /// Lanes per work item: a group's staged arrays stay in the L2 cache.
@@ -35,6 +34,10 @@ pub trait ClosureSource<'a>: Sync {
     /// Whether every lane has the same closure.
     fn is_shared(&self) -> bool {
         false
+    }
+    /// How many lanes have a closure, when known.
+    fn lane_count(&self) -> Option<usize> {
+        None
     }
 }
 
@@ -52,6 +55,9 @@ impl<'a> ClosureSource<'a> for &'a Closure {
 impl<'a> ClosureSource<'a> for &'a [&'a Closure] {
     fn closure(&self, lane: usize) -> Result<&'a Closure, Error> {
         Ok(self[lane])
+    }
+    fn lane_count(&self) -> Option<usize> {
+        Some(<[&Closure]>::len(self))
     }
 }
 
@@ -98,31 +104,101 @@ pub struct Soa3Mut<'a> {
     pub z: &'a mut [f32],
 }
 
-impl<'a> Soa3Mut<'a> {
+impl Soa3Mut<'_> {
     fn set(&mut self, lane: usize, v: [f32; 3]) {
         self.x[lane] = v[0];
         self.y[lane] = v[1];
         self.z[lane] = v[2];
     }
+}
 
-    /// Cut into consecutive blocks of [`BLOCK`] lanes.
-    fn blocks(self) -> impl Iterator<Item = Soa3Mut<'a>> {
-        self.x
-            .chunks_mut(BLOCK)
-            .zip(self.y.chunks_mut(BLOCK))
-            .zip(self.z.chunks_mut(BLOCK))
-            .map(|((x, y), z)| Soa3Mut { x, y, z })
+/// Most lanes one batch call takes (`GLINT_MAX_BATCH_COUNT`): lanes are indexed by
+/// 32-bit integers, and every array of that many pointers fits in `isize::MAX` bytes.
+pub const MAX_COUNT: usize = u32::MAX as usize;
+
+/// A count beyond [`MAX_COUNT`] is refused before any array is touched.
+pub fn check_count(count: usize) -> Result<(), Error> {
+    if count > MAX_COUNT {
+        return Err(Error::new(
+            Status::OutOfRange,
+            format!("count = {count} exceeds the largest batch, {MAX_COUNT} lanes"),
+        ));
+    }
+    Ok(())
+}
+
+/// An array the call reads or writes must hold `count` lanes.
+fn check_len(len: usize, count: usize, what: &str) -> Result<(), Error> {
+    if len < count {
+        return Err(Error::new(
+            Status::InvalidArgument,
+            format!("{what} has {len} lanes but count is {count}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Outputs cut at a lane, so that blocks are handed out without a list of them.
+trait SplitLanes: Sized + Send {
+    /// `(lanes ..lanes, lanes lanes..)`.
+    fn split_lanes(self, lanes: usize) -> (Self, Self);
+}
+
+impl<T: Send> SplitLanes for &mut [T] {
+    fn split_lanes(self, lanes: usize) -> (Self, Self) {
+        self.split_at_mut(lanes)
     }
 }
 
-/// Cut an optional output into blocks, `None` for each block when absent.
-fn optional_blocks<'a, T>(
-    out: Option<&'a mut [T]>,
-    count: usize,
-) -> Box<dyn Iterator<Item = Option<&'a mut [T]>> + 'a> {
-    match out {
-        Some(s) => Box::new(s.chunks_mut(BLOCK).map(Some)),
-        None => Box::new((0..count.div_ceil(BLOCK)).map(|_| None)),
+impl<S: SplitLanes> SplitLanes for Option<S> {
+    fn split_lanes(self, lanes: usize) -> (Self, Self) {
+        match self {
+            Some(s) => {
+                let (a, b) = s.split_lanes(lanes);
+                (Some(a), Some(b))
+            }
+            None => (None, None),
+        }
+    }
+}
+
+impl SplitLanes for Soa3Mut<'_> {
+    fn split_lanes(self, lanes: usize) -> (Self, Self) {
+        let (x, x2) = self.x.split_lanes(lanes);
+        let (y, y2) = self.y.split_lanes(lanes);
+        let (z, z2) = self.z.split_lanes(lanes);
+        (
+            Soa3Mut { x, y, z },
+            Soa3Mut {
+                x: x2,
+                y: y2,
+                z: z2,
+            },
+        )
+    }
+}
+
+impl Soa3<'_> {
+    fn check(&self, count: usize, what: &str) -> Result<(), Error> {
+        for (len, axis) in [
+            (self.x.len(), "x"),
+            (self.y.len(), "y"),
+            (self.z.len(), "z"),
+        ] {
+            check_len(len, count, &format!("{what}.{axis}"))?;
+        }
+        Ok(())
+    }
+}
+
+impl Soa3Mut<'_> {
+    fn check(&self, count: usize, what: &str) -> Result<(), Error> {
+        Soa3 {
+            x: self.x,
+            y: self.y,
+            z: self.z,
+        }
+        .check(count, what)
     }
 }
 
@@ -139,25 +215,59 @@ impl<'a, C: ClosureSource<'a>> BatchInput<'a, C> {
     fn is_active(&self, lane: usize) -> bool {
         self.active.is_none_or(|a| a[lane] != 0)
     }
+
+    /// The count is within [`MAX_COUNT`] and every input array holds `count` lanes.
+    fn check(&self) -> Result<(), Error> {
+        check_count(self.count)?;
+        if let Some(len) = self.closures.lane_count() {
+            check_len(len, self.count, "closures")?;
+        }
+        if let Some(a) = self.active {
+            check_len(a.len(), self.count, "active")?;
+        }
+        self.wo.check(self.count, "wo")
+    }
 }
 
-/// Run `block(start, out)` for every block, in parallel when the batch is large
-/// enough and `exec` allows; the error of the lowest failing lane wins.
-fn run_blocks<O: Send>(
+/// Run `block(start, out)` for every block of `count` lanes, in parallel when the
+/// batch is large enough and `exec` allows; the error of the lowest failing lane wins.
+fn run_blocks<O: SplitLanes>(
     exec: &Exec<'_>,
-    outputs: Vec<O>,
-    block: impl Fn(usize, O) -> Option<Error> + Sync,
+    count: usize,
+    out: O,
+    block: impl Fn(usize, O) -> Result<(), Error> + Sync,
 ) -> Result<(), Error> {
-    let run = |(b, o): (usize, O)| block(b * BLOCK, o);
-    let errors: Vec<Option<Error>> = match exec.threads {
-        _ if outputs.len() < 2 => outputs.into_iter().enumerate().map(run).collect(),
-        Threads::Caller => outputs.into_iter().enumerate().map(run).collect(),
-        Threads::Global => outputs.into_par_iter().enumerate().map(run).collect(),
-        Threads::Pool(pool) => {
-            pool.install(|| outputs.into_par_iter().enumerate().map(run).collect())
-        }
+    match exec.threads {
+        _ if count == 0 => Ok(()),
+        _ if count <= BLOCK => block(0, out),
+        Threads::Caller => split_blocks(0, count, out, false, &block),
+        Threads::Global => split_blocks(0, count, out, true, &block),
+        Threads::Pool(pool) => pool.install(|| split_blocks(0, count, out, true, &block)),
+    }
+}
+
+/// The blocks of lanes `start .. start + count`, halved at a block boundary until one
+/// is left (on two rayon workers when `parallel`); the lower half's error wins.
+fn split_blocks<O: SplitLanes>(
+    start: usize,
+    count: usize,
+    out: O,
+    parallel: bool,
+    block: &(impl Fn(usize, O) -> Result<(), Error> + Sync),
+) -> Result<(), Error> {
+    if count <= BLOCK {
+        return block(start, out);
+    }
+    let half = count.div_ceil(BLOCK) / 2 * BLOCK;
+    let (low, high) = out.split_lanes(half);
+    let low = || split_blocks(start, half, low, parallel, block);
+    let high = || split_blocks(start + half, count - half, high, parallel, block);
+    let (a, b) = if parallel {
+        rayon::join(low, high)
+    } else {
+        (low(), high())
     };
-    errors.into_iter().flatten().next().map_or(Ok(()), Err)
+    a.and(b)
 }
 
 /// Outputs of [`eval`].
@@ -175,18 +285,19 @@ pub fn eval<'a, C: ClosureSource<'a>>(
     out: EvalOutput<'_>,
 ) -> Result<(), Error> {
     let n = input.count;
-    let blocks: Vec<_> = out
-        .value
-        .blocks()
-        .zip(out.pdf.chunks_mut(BLOCK))
-        .zip(optional_blocks(out.pdf_reverse, n))
-        .map(|((value, pdf), pdf_reverse)| EvalBlockOutput {
-            value: Some(value),
-            pdf,
-            pdf_reverse,
-        })
-        .collect();
-    run_blocks(exec, blocks, |start, mut out| {
+    input.check()?;
+    wi.check(n, "wi")?;
+    out.value.check(n, "value")?;
+    check_len(out.pdf.len(), n, "pdf")?;
+    if let Some(rev) = &out.pdf_reverse {
+        check_len(rev.len(), n, "pdf_reverse")?;
+    }
+    let out = EvalBlockOutput {
+        value: Some(out.value),
+        pdf: out.pdf,
+        pdf_reverse: out.pdf_reverse,
+    };
+    run_blocks(exec, n, out, |start, mut out| {
         with_scratch(|s| eval_block(exec.kernels, input, wi, start, s, &mut out))
     })
 }
@@ -198,15 +309,15 @@ pub fn pdf<'a, C: ClosureSource<'a>>(
     wi: Soa3<'_>,
     out: &mut [f32],
 ) -> Result<(), Error> {
-    let blocks: Vec<_> = out
-        .chunks_mut(BLOCK)
-        .map(|pdf| EvalBlockOutput {
-            value: None,
-            pdf,
-            pdf_reverse: None,
-        })
-        .collect();
-    run_blocks(exec, blocks, |start, mut out| {
+    input.check()?;
+    wi.check(input.count, "wi")?;
+    check_len(out.len(), input.count, "pdf")?;
+    let out = EvalBlockOutput {
+        value: None,
+        pdf: out,
+        pdf_reverse: None,
+    };
+    run_blocks(exec, input.count, out, |start, mut out| {
         with_scratch(|s| eval_block(exec.kernels, input, wi, start, s, &mut out))
     })
 }
@@ -218,6 +329,26 @@ struct EvalBlockOutput<'o> {
     pdf_reverse: Option<&'o mut [f32]>,
 }
 
+impl SplitLanes for EvalBlockOutput<'_> {
+    fn split_lanes(self, lanes: usize) -> (Self, Self) {
+        let (value, value2) = self.value.split_lanes(lanes);
+        let (pdf, pdf2) = self.pdf.split_lanes(lanes);
+        let (rev, rev2) = self.pdf_reverse.split_lanes(lanes);
+        (
+            EvalBlockOutput {
+                value,
+                pdf,
+                pdf_reverse: rev,
+            },
+            EvalBlockOutput {
+                value: value2,
+                pdf: pdf2,
+                pdf_reverse: rev2,
+            },
+        )
+    }
+}
+
 /// Eval the block starting at lane `start`.
 fn eval_block<'a, C: ClosureSource<'a>>(
     kernels: Kernels,
@@ -226,16 +357,13 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     start: usize,
     s: &mut Scratch,
     out: &mut EvalBlockOutput<'_>,
-) -> Option<Error> {
+) -> Result<(), Error> {
     let end = (start + BLOCK).min(input.count);
-    s.groups.build(input, start..end, None);
+    s.groups.build(input, start..end, None)?;
     for g in 0..s.groups.groups().len() {
-        let group = &s.groups.groups()[g];
-        let len = padded(group.lanes.len());
-        s.reset(len);
+        let (len, closure) = begin_group(input, s, g)?;
         stage_input(kernels, input, s, g, len, Some(wi));
         let group = &s.groups.groups()[g];
-        let closure = input.closures.closure(group.rep).expect("resolved before");
         for (k, l) in closure.lobes().iter().enumerate() {
             let lanes = s.lobe.lanes(input, group, k, len);
             let [vr, vg, vb] = &mut s.value;
@@ -283,6 +411,20 @@ fn eval_block<'a, C: ClosureSource<'a>>(
             rev[lane] = 0.0;
         }
     })
+}
+
+/// Group `g`'s length padded to whole registers and its representative closure, with
+/// the scratch buffers reserved for it.
+fn begin_group<'a, C: ClosureSource<'a>>(
+    input: &BatchInput<'a, C>,
+    s: &mut Scratch,
+    g: usize,
+) -> Result<(usize, &'a Closure), Error> {
+    let group = &s.groups.groups()[g];
+    let len = padded(group.lanes.len());
+    let closure = input.closures.closure(group.rep).expect("resolved before");
+    s.reset(len, closure)?;
+    Ok((len, closure))
 }
 
 /// Stage group `g`'s `wo` (and `wi`) into the scratch rows.
@@ -364,11 +506,11 @@ impl<'g> Scatter<'g> {
 }
 
 /// Zero-output the lanes that failed before grouping; the block's first error.
-fn finish_block(s: &mut Scratch, start: usize, mut zero: impl FnMut(usize)) -> Option<Error> {
+fn finish_block(s: &mut Scratch, start: usize, mut zero: impl FnMut(usize)) -> Result<(), Error> {
     for &lane in &s.groups.failed {
         zero(lane as usize - start);
     }
-    s.groups.take_error()
+    s.groups.take_error().map_or(Ok(()), Err)
 }
 
 /// Directional albedo of every active lane's closure.
@@ -377,17 +519,16 @@ pub fn albedo<'a, C: ClosureSource<'a>>(
     input: &BatchInput<'a, C>,
     out: Soa3Mut<'_>,
 ) -> Result<(), Error> {
-    let blocks: Vec<_> = out.blocks().collect();
-    run_blocks(exec, blocks, |start, mut out| {
+    input.check()?;
+    out.check(input.count, "albedo")?;
+    run_blocks(exec, input.count, out, |start, mut out| {
         with_scratch(|s| {
             let end = (start + BLOCK).min(input.count);
-            s.groups.build(input, start..end, None);
+            s.groups.build(input, start..end, None)?;
             for g in 0..s.groups.groups().len() {
-                let len = padded(s.groups.groups()[g].lanes.len());
-                s.reset(len);
+                let (len, closure) = begin_group(input, s, g)?;
                 stage_input(exec.kernels, input, s, g, len, None);
                 let group = &s.groups.groups()[g];
-                let closure = input.closures.closure(group.rep).expect("resolved before");
                 for (k, l) in closure.lobes().iter().enumerate() {
                     let lanes = s.lobe.lanes(input, group, k, len);
                     let mut job = AlbedoJob {
@@ -427,7 +568,63 @@ pub struct SampleOutput<'a> {
     pub roughness: Option<&'a mut [f32]>,
 }
 
+impl SplitLanes for SampleOutput<'_> {
+    fn split_lanes(self, lanes: usize) -> (Self, Self) {
+        let (wi, wi2) = self.wi.split_lanes(lanes);
+        let (pdf, pdf2) = self.pdf.split_lanes(lanes);
+        let (weight, weight2) = self.weight.split_lanes(lanes);
+        let (value, value2) = self.value.split_lanes(lanes);
+        let (flags, flags2) = self.flags.split_lanes(lanes);
+        let (lobe, lobe2) = self.lobe.split_lanes(lanes);
+        let (eta, eta2) = self.eta.split_lanes(lanes);
+        let (roughness, roughness2) = self.roughness.split_lanes(lanes);
+        (
+            SampleOutput {
+                wi,
+                pdf,
+                weight,
+                value,
+                flags,
+                lobe,
+                eta,
+                roughness,
+            },
+            SampleOutput {
+                wi: wi2,
+                pdf: pdf2,
+                weight: weight2,
+                value: value2,
+                flags: flags2,
+                lobe: lobe2,
+                eta: eta2,
+                roughness: roughness2,
+            },
+        )
+    }
+}
+
 impl SampleOutput<'_> {
+    /// Every output array holds `count` lanes.
+    fn check(&self, count: usize) -> Result<(), Error> {
+        self.wi.check(count, "wi")?;
+        check_len(self.pdf.len(), count, "pdf")?;
+        self.weight.check(count, "weight")?;
+        if let Some(v) = &self.value {
+            v.check(count, "value")?;
+        }
+        for (len, what) in [
+            (self.flags.as_ref().map(|f| f.len()), "flags"),
+            (self.lobe.as_ref().map(|l| l.len()), "lobe"),
+            (self.eta.as_ref().map(|e| e.len()), "eta"),
+            (self.roughness.as_ref().map(|r| r.len()), "roughness"),
+        ] {
+            if let Some(len) = len {
+                check_len(len, count, what)?;
+            }
+        }
+        Ok(())
+    }
+
     fn write(&mut self, i: usize, s: &SampleResult) {
         self.wi.set(i, [s.wi.x, s.wi.y, s.wi.z]);
         self.pdf[i] = s.pdf;
@@ -483,33 +680,12 @@ pub fn sample<'a, C: ClosureSource<'a>>(
     out: SampleOutput<'_>,
 ) -> Result<(), Error> {
     let n = input.count;
-    let blocks: Vec<_> = out
-        .wi
-        .blocks()
-        .zip(out.pdf.chunks_mut(BLOCK))
-        .zip(out.weight.blocks())
-        .zip(match out.value {
-            Some(v) => Box::new(v.blocks().map(Some)) as Box<dyn Iterator<Item = _>>,
-            None => Box::new((0..n.div_ceil(BLOCK)).map(|_| None)),
-        })
-        .zip(optional_blocks(out.flags, n))
-        .zip(optional_blocks(out.lobe, n))
-        .zip(optional_blocks(out.eta, n))
-        .zip(optional_blocks(out.roughness, n))
-        .map(
-            |(((((((wi, pdf), weight), value), flags), lobe), eta), roughness)| SampleOutput {
-                wi,
-                pdf,
-                weight,
-                value,
-                flags,
-                lobe,
-                eta,
-                roughness,
-            },
-        )
-        .collect();
-    run_blocks(exec, blocks, |start, mut out| {
+    input.check()?;
+    for (row, what) in [(u.u_lobe, "u_lobe"), (u.u0, "u0"), (u.u1, "u1")] {
+        check_len(row.len(), n, what)?;
+    }
+    out.check(n)?;
+    run_blocks(exec, n, out, |start, mut out| {
         with_scratch(|s| sample_block(exec.kernels, input, u, start, s, &mut out))
     })
 }
@@ -521,18 +697,16 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     start: usize,
     s: &mut Scratch,
     out: &mut SampleOutput<'_>,
-) -> Option<Error> {
+) -> Result<(), Error> {
     let end = (start + BLOCK).min(input.count);
     let randoms = Randoms {
         u: [u.u_lobe, u.u0, u.u1],
     };
-    s.groups.build(input, start..end, Some(randoms));
+    s.groups.build(input, start..end, Some(randoms))?;
     for g in 0..s.groups.groups().len() {
-        let len = padded(s.groups.groups()[g].lanes.len());
-        s.reset(len);
+        let (len, closure) = begin_group(input, s, g)?;
         stage_input(kernels, input, s, g, len, None);
         let group = &s.groups.groups()[g];
-        let closure = input.closures.closure(group.rep).expect("resolved before");
         let k = group.lobe;
         let lobe = closure.lobes()[k].lobe;
         // The chosen lobe's random numbers: the rescaled lobe choice, then u0 and u1
@@ -621,10 +795,12 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         let mut any_bad = false;
         for j in 0..n {
             let e = events[j];
-            let ok = failed[j] == 0 && e & EVENT_VALID != 0 && pdf[j] > 0.0 && pdf[j].is_finite();
+            let weight = (failed[j] == 0 && e & EVENT_VALID != 0)
+                .then(|| sample_weight(Rgb::new(vr[j], vg[j], vb[j]), pdf[j]))
+                .flatten();
+            let ok = weight.is_some();
             any_bad |= !ok;
-            let inv = if ok { 1.0 / pdf[j] } else { 0.0 };
-            (wr[j], wg[j], wb[j]) = (vr[j] * inv, vg[j] * inv, vb[j] * inv);
+            [wr[j], wg[j], wb[j]] = weight.unwrap_or(Rgb::zero()).to_array();
             let side = if e & EVENT_TRANSMITTED != 0 {
                 flags::TRANSMISSION
             } else {

@@ -1,10 +1,12 @@
 //! Grouping and staging for the batch kernels: which lanes run together, and the
 //! padded SoA arrays they read and write. All buffers live in a per-thread
-//! [`Scratch`] that only grows, so steady-state batch calls do not allocate.
+//! [`Scratch`] that only grows, so steady-state batch calls do not allocate; every
+//! growth is reserved with `try_reserve`, so a shortage of memory is an error
+//! (`Status::OutOfMemory`), never an abort.
 
 use super::{BatchInput, ClosureSource, Soa3};
 use crate::closure::{Closure, ONE_MINUS_EPSILON, check_randoms};
-use crate::error::Error;
+use crate::error::{Error, Status};
 use crate::math::Vec3;
 use crate::simd::Kernels;
 use crate::simd::kernels::{LANE_MULTIPLE, LobeLanes, normalize};
@@ -69,16 +71,19 @@ impl Groups {
 
     /// Group the active lanes of `range`. With `randoms`, each lane also chooses its
     /// lobe (as `Closure::sample` does); lanes with nothing to choose fail silently.
+    /// Fails only when memory is short.
     pub fn build<'a, C: ClosureSource<'a>>(
         &mut self,
         input: &BatchInput<'a, C>,
         range: Range<usize>,
         randoms: Option<Randoms<'_>>,
-    ) {
+    ) -> Result<(), Error> {
         self.used = 0;
         self.failed.clear();
         self.error = None;
         self.u_reused.clear();
+        reserve(&mut self.failed, range.len())?;
+        reserve(&mut self.u_reused, range.len())?;
         self.u_reused.resize(range.len(), 0.0);
         let start = range.start;
         if randoms.is_none() && input.active.is_none() && input.closures.is_shared() {
@@ -89,22 +94,24 @@ impl Groups {
                 .and_then(|c| c.check_finished())
             {
                 Ok(()) => {
-                    let g = self.find_or_add(input, start, 0);
-                    self.list[g].lanes.extend(range.map(|l| l as u32));
+                    let g = self.find_or_add(input, start, 0)?;
+                    let lanes = &mut self.list[g].lanes;
+                    reserve(lanes, range.len())?;
+                    lanes.extend(range.map(|l| l as u32));
                 }
                 Err(e) => {
                     self.failed.extend(range.map(|l| l as u32));
                     self.fail(start, e);
                 }
             }
-            return;
+            return Ok(());
         }
         if let Some(r) = randoms
             && input.active.is_none()
             && input.closures.is_shared()
-            && self.single_lobe_fast_path(input, range.clone(), r)
+            && self.single_lobe_fast_path(input, range.clone(), r)?
         {
-            return;
+            return Ok(());
         }
         // A shared closure is resolved and checked once.
         let shared = input.closures.is_shared().then(|| {
@@ -159,13 +166,16 @@ impl Groups {
             let ptr = closure as *const Closure;
             let g = match previous {
                 Some((p, k, g)) if p == ptr && k == lobe => g,
-                _ => self.find_or_add(input, lane, lobe),
+                _ => self.find_or_add(input, lane, lobe)?,
             };
             let group = &mut self.list[g];
+            let need = group.lanes.len() + 1;
+            reserve(&mut group.lanes, need)?;
             group.lanes.push(lane as u32);
             group.uniform &= group.closure == ptr as usize;
             previous = Some((ptr, lobe, g));
         }
+        Ok(())
     }
 
     /// Sampling a shared one-lobe closure with finite random numbers: every lane
@@ -175,7 +185,7 @@ impl Groups {
         input: &BatchInput<'a, C>,
         range: Range<usize>,
         r: Randoms<'_>,
-    ) -> bool {
+    ) -> Result<bool, Error> {
         let start = range.start;
         let one_lobe = input.closures.closure(start).is_ok_and(|c| {
             c.is_finished() && c.lobes().len() == 1 && c.lobes()[0].probability == 1.0
@@ -186,14 +196,16 @@ impl Groups {
                 .fold(true, |ok, x| ok & x.is_finite())
         });
         if !(one_lobe && finite) {
-            return false;
+            return Ok(false);
         }
         for (reused, &u) in self.u_reused.iter_mut().zip(&r.u[0][range.clone()]) {
             *reused = u.clamp(0.0, ONE_MINUS_EPSILON);
         }
-        let g = self.find_or_add(input, start, 0);
-        self.list[g].lanes.extend(range.map(|l| l as u32));
-        true
+        let g = self.find_or_add(input, start, 0)?;
+        let lanes = &mut self.list[g].lanes;
+        reserve(lanes, range.len())?;
+        lanes.extend(range.map(|l| l as u32));
+        Ok(true)
     }
 
     /// The group of `lane`'s closure shape and `lobe`, created if new.
@@ -202,35 +214,51 @@ impl Groups {
         input: &BatchInput<'a, C>,
         lane: usize,
         lobe: usize,
-    ) -> usize {
+    ) -> Result<usize, Error> {
         let closure = input.closures.closure(lane).expect("resolved before");
         let found = self.groups().iter().position(|g| {
             g.lobe == lobe
                 && closure.same_shape(input.closures.closure(g.rep).expect("resolved before"))
         });
-        found.unwrap_or_else(|| {
-            if self.used == self.list.len() {
-                self.list.push(Group {
-                    rep: 0,
-                    closure: 0,
-                    uniform: true,
-                    lobe: 0,
-                    lanes: Vec::new(),
-                });
-            }
-            let g = &mut self.list[self.used];
-            g.rep = lane;
-            g.closure = closure as *const Closure as usize;
-            g.uniform = true;
-            g.lobe = lobe;
-            g.lanes.clear();
-            self.used += 1;
-            self.used - 1
-        })
+        if let Some(g) = found {
+            return Ok(g);
+        }
+        if self.used == self.list.len() {
+            reserve(&mut self.list, self.used + 1)?;
+            self.list.push(Group {
+                rep: 0,
+                closure: 0,
+                uniform: true,
+                lobe: 0,
+                lanes: Vec::new(),
+            });
+        }
+        let g = &mut self.list[self.used];
+        g.rep = lane;
+        g.closure = closure as *const Closure as usize;
+        g.uniform = true;
+        g.lobe = lobe;
+        g.lanes.clear();
+        self.used += 1;
+        Ok(self.used - 1)
     }
 }
 
-/// Grow `v` to at least `len` values (never shrinks, never zeroes).
+/// Room for `len` values in `v`, or `Status::OutOfMemory`.
+pub(super) fn reserve<T>(v: &mut Vec<T>, len: usize) -> Result<(), Error> {
+    match len.checked_sub(v.len()) {
+        Some(more) if more > 0 => v.try_reserve(more).map_err(|_| {
+            Error::new(
+                Status::OutOfMemory,
+                "out of memory: the batch's staging buffers could not grow",
+            )
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// Grow `v` to at least `len` values (never shrinks, never zeroes); within what
+/// [`Scratch::reset`] reserved, this does not allocate.
 pub(super) fn grow<T: Copy + Default>(v: &mut Vec<T>, len: usize) -> &mut [T] {
     if v.len() < len {
         v.resize(len, T::default());
@@ -398,8 +426,42 @@ pub(super) struct Scratch {
 }
 
 impl Scratch {
-    /// Zero the accumulators and failure flags for a group of `len` lanes.
-    pub fn reset(&mut self, len: usize) {
+    /// Reserve every buffer a group of `len` lanes of `closure`'s shape needs, then
+    /// zero the accumulators and failure flags.
+    pub fn reset(&mut self, len: usize, closure: &Closure) -> Result<(), Error> {
+        let params = (0..closure.lobes().len())
+            .map(|k| closure.lobe_params(k).len())
+            .max()
+            .unwrap_or(0);
+        let lobe = &mut self.lobe;
+        reserve(&mut lobe.params, params * len)?;
+        reserve(&mut lobe.frame, 9 * len)?;
+        reserve(&mut lobe.weight, 3 * len)?;
+        reserve(&mut lobe.probability, len)?;
+        for rows in [
+            &mut self.wo,
+            &mut self.wi,
+            &mut self.u,
+            &mut self.value,
+            &mut self.sample_value,
+        ] {
+            for row in rows {
+                reserve(row, len)?;
+            }
+        }
+        for row in [
+            &mut self.pdf,
+            &mut self.pdf_reverse,
+            &mut self.sample_pdf,
+            &mut self.eta,
+            &mut self.roughness,
+        ] {
+            reserve(row, len)?;
+        }
+        reserve(&mut self.failed, len)?;
+        reserve(&mut self.events, len)?;
+        reserve(&mut self.flags, len)?;
+        reserve(&mut self.lobe_index, len)?;
         for row in rows3(&mut self.value, len) {
             row.fill(0.0);
         }
@@ -407,6 +469,7 @@ impl Scratch {
         grow(&mut self.pdf_reverse, len).fill(0.0);
         grow(&mut self.failed, len).fill(0);
         self.any_failed = false;
+        Ok(())
     }
 }
 

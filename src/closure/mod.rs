@@ -20,6 +20,13 @@ use crate::registry::{BUILTINS, Registry};
 pub const MAX_LOBES: usize = 16;
 /// Most parameter values (floats) all lobes of one closure hold together.
 pub const MAX_PARAM_VALUES: usize = 512;
+/// Largest lobe weight component `add_lobe` (and so JSON) accepts. A closure sums at
+/// most [`MAX_LOBES`] terms `weight * f |cos|`, so with this bound a closure's value
+/// stays finite for every per-lobe value (weight 1) up to `f32::MAX / (16 * 1e16)`
+/// = 2.1e21, fourteen orders of magnitude above the largest a built-in lobe returns
+/// (a GGX peak at the delta threshold), and albedos (at most 1 per lobe) and selection
+/// shares stay far from overflow.
+pub const MAX_LOBE_WEIGHT: f32 = 1e16;
 
 /// One lobe of a closure.
 #[derive(Clone, Copy)]
@@ -108,15 +115,15 @@ impl Closure {
         &self.lobes[..self.lobe_count]
     }
 
-    /// Whether `other` has the same lobe types in the same order, the same enumerated
+    /// Whether `other` has the same lobe types (the same registered objects, whatever
+    /// runtime they come from) in the same order, the same enumerated
     /// choices and the same transport: lanes of such closures share batch kernels.
     pub fn same_shape(&self, other: &Closure) -> bool {
         self.lobe_count == other.lobe_count
             && self.mode == other.mode
             && (0..self.lobe_count).all(|k| {
                 let (a, b) = (&self.lobes[k], &other.lobes[k]);
-                a.type_id == b.type_id
-                    && a.lobe.name() == b.lobe.name()
+                same_lobe_type(a, b)
                     && params::same_choices(
                         a.lobe.params(),
                         self.lobe_params(k),
@@ -160,6 +167,16 @@ impl Closure {
                 Status::InvalidArgument,
                 format!(
                     "{}: weight[{i}] = {} must be finite and >= 0",
+                    lobe.name(),
+                    weight[i]
+                ),
+            ));
+        }
+        if let Some(i) = weight.iter().position(|w| *w > MAX_LOBE_WEIGHT) {
+            return Err(Error::new(
+                Status::OutOfRange,
+                format!(
+                    "{}: weight[{i}] = {:e} exceeds the largest lobe weight, {MAX_LOBE_WEIGHT:e}",
                     lobe.name(),
                     weight[i]
                 ),
@@ -221,9 +238,11 @@ impl Closure {
         if shares[..n].iter().sum::<f32>() <= 0.0 {
             shares[..n].fill(1.0);
         }
-        let total: f32 = shares[..n].iter().sum();
-        for (lobe, share) in self.lobes[..n].iter_mut().zip(shares) {
-            lobe.probability = share / total;
+        for (lobe, p) in self.lobes[..n]
+            .iter_mut()
+            .zip(normalize_shares(&shares[..n]))
+        {
+            lobe.probability = p;
         }
         self.finished = true;
         Ok(())
@@ -403,14 +422,12 @@ impl Closure {
             Some(_) if self.lobe_count > 1 => self.mixture(wo, wi),
             _ => (l.weight * s.value, s.pdf),
         };
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return Err(no_sample());
-        }
+        let weight = sample_weight(value, pdf).ok_or_else(no_sample)?;
         Ok(SampleResult {
             wi,
             value,
             pdf,
-            weight: value.map(|v| v / pdf),
+            weight,
             flags: s.flags(l.lobe.flags()),
             lobe: k as u32,
             eta: s.eta,
@@ -444,6 +461,45 @@ impl Closure {
     }
 }
 
+/// Whether two lobes are of the same registered type. The type id alone is not enough:
+/// two runtimes give different plugin lobes the same id (and may give them one name).
+/// Each plugin lobe is its own object, so the data pointer tells them apart; built-in
+/// types may be zero-sized (one address for all), but their ids differ in every registry.
+fn same_lobe_type(a: &LobeInstance, b: &LobeInstance) -> bool {
+    a.type_id == b.type_id && std::ptr::addr_eq(a.lobe, b.lobe)
+}
+
+/// Selection probabilities proportional to `shares` (finite, >= 0, not all 0). The
+/// shares are divided by the largest first, so their sum cannot overflow.
+fn normalize_shares(shares: &[f32]) -> [f32; MAX_LOBES] {
+    let largest = shares.iter().fold(0.0f32, |m, &s| m.max(s));
+    let mut p = [0.0f32; MAX_LOBES];
+    for (p, &s) in p.iter_mut().zip(shares) {
+        *p = s / largest;
+    }
+    let total: f32 = p.iter().sum();
+    for p in &mut p {
+        *p /= total;
+    }
+    p
+}
+
+/// A sample's weight, `value / pdf` (one division per channel, never `value * (1 /
+/// pdf)`, which overflows for denormal pdfs), computed here for the scalar and batch
+/// calls alike; `None` (no sample) when the pdf is not a positive finite number or a
+/// channel of the weight is not finite.
+pub(crate) fn sample_weight(value: Rgb<f32>, pdf: f32) -> Option<Rgb<f32>> {
+    if !(pdf > 0.0 && pdf.is_finite()) {
+        return None;
+    }
+    let weight = value.map(|v| v / pdf);
+    weight
+        .to_array()
+        .iter()
+        .all(|w| w.is_finite())
+        .then_some(weight)
+}
+
 /// The largest `f32` below 1, so that `u < 1` for every sample dimension.
 pub(crate) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -468,4 +524,28 @@ fn no_sample() -> Error {
         Status::NoSample,
         "no sample: the closure cannot scatter from this direction",
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shares_near_the_largest_float_normalize_without_overflow() {
+        let p = normalize_shares(&[3e38, 3e38, 0.0, f32::MAX]);
+        let half = 3e38 / f32::MAX / (2.0 * 3e38 / f32::MAX + 1.0);
+        assert!((p[0] - half).abs() <= 1e-6 && p[0] == p[1], "{p:?}");
+        assert_eq!(p[2], 0.0);
+        assert!((p[..4].iter().sum::<f32>() - 1.0).abs() <= 1e-6, "{p:?}");
+    }
+
+    #[test]
+    fn weights_divide_and_non_finite_weights_are_no_sample() {
+        let v = Rgb::new(3e-45, 0.0, 6e-45);
+        let w = sample_weight(v, 3e-45).unwrap();
+        assert_eq!(w.to_array(), [1.0, 0.0, 2.0]);
+        assert_eq!(sample_weight(Rgb::new(1e30, 0.0, 0.0), 1e-30), None);
+        assert_eq!(sample_weight(v, 0.0), None);
+        assert_eq!(sample_weight(v, f32::INFINITY), None);
+    }
 }

@@ -9,6 +9,15 @@ use crate::batch::{
 };
 use crate::closure::Closure;
 
+/// Most lanes one batch call takes (`count`; larger counts return
+/// `GLINT_ERROR_OUT_OF_RANGE` before any array is read): lanes are indexed by 32-bit
+/// integers.
+pub const GLINT_MAX_BATCH_COUNT: u64 = 4_294_967_295;
+const _: () = assert!(GLINT_MAX_BATCH_COUNT as usize == batch::MAX_COUNT);
+// Every array of `count` elements (at most 8 bytes each) fits in `isize::MAX` bytes, as
+// `std::slice::from_raw_parts` requires.
+const _: () = assert!(batch::MAX_COUNT <= isize::MAX as usize / 8);
+
 /// Arguments of `glint_eval_batch`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -286,7 +295,8 @@ unsafe fn read_common<'a>(
     a: &CommonArgs,
 ) -> Result<(Lanes<'a>, Option<&'a [u8]>, Soa3<'a>), Error> {
     let n = a.count;
-    // SAFETY: per the contract.
+    batch::check_count(n)?;
+    // SAFETY: per the contract, and `n` is small enough for a slice of any element.
     unsafe {
         let lanes = lanes(a.closure, a.closures, n)?;
         let active = (!a.active.is_null()).then(|| std::slice::from_raw_parts(a.active, n));

@@ -57,6 +57,8 @@ pub const GLINT_ERROR_PLUGIN_BLOCK_SIZE: glint_status = 19;
 /// A runtime, arena or closure handle that was destroyed, reset (closures of a reset
 /// arena) or belongs to a destroyed runtime; see `glint_runtime_destroy`.
 pub const GLINT_ERROR_INVALID_HANDLE: glint_status = 20;
+/// Memory ran short (a batch's staging buffers could not grow).
+pub const GLINT_ERROR_OUT_OF_MEMORY: glint_status = 21;
 
 pub const GLINT_VERSION_MAJOR: u32 = 0;
 pub const GLINT_VERSION_MINOR: u32 = 1;
@@ -241,11 +243,13 @@ mod tests {
             GLINT_ERROR_PLUGIN_PARAMS,
             GLINT_ERROR_PLUGIN_BLOCK_SIZE,
             GLINT_ERROR_INVALID_HANDLE,
+            GLINT_ERROR_OUT_OF_MEMORY,
         ];
         assert_eq!(c.len(), Status::ALL.len());
         for (s, c) in Status::ALL.iter().zip(c) {
             assert_eq!(*s as u32, c, "{s:?}");
         }
+        assert_eq!(Status::OutOfMemory as u32, GLINT_ERROR_OUT_OF_MEMORY);
         use crate::lobes::flags;
         assert_eq!(
             [
