@@ -72,49 +72,70 @@ impl<L: Lane> Distribution<L> {
         L::select(above, value, L::zero())
     }
 
-    /// Smith's `Lambda(w)` (Heitz 2014 eqs. 72 and 86), clamped to stay finite at grazing.
+    /// `Lambda(w) |w.z|`: Smith's `Lambda` (Heitz 2014 eqs. 72 and 86) times the cosine,
+    /// the projected area of the back-facing microsurface, which stays finite where
+    /// `Lambda` diverges (`|w.z| -> 0`). With `p^2 = (alpha_x w.x)^2 + (alpha_y w.y)^2`:
+    /// GGX `(sqrt(z^2 + p^2) - |z|) / 2`, Beckmann `(p exp(-a^2) / sqrt(pi) - |z| erfc(a)) / 2`
+    /// with `a = |z| / p`; both 0 along the normal (`p = 0`).
     #[inline(always)]
-    pub fn lambda(&self, w: Vec3<L>) -> L {
+    fn lambda_cos(&self, w: Vec3<L>) -> L {
         let proj2 = (self.alpha_x * w.x).sqr() + (self.alpha_y * w.y).sqr();
-        let z2 = w.z * w.z;
-        let big = L::splat(1e30);
-        let value = match self.kind {
-            NdfKind::Ggx => {
-                // (sqrt(1 + x) - 1) / 2 == x / (2 (sqrt(1 + x) + 1)) with x = alpha^2 tan^2,
-                // the second form has no cancellation for near-normal directions.
-                let x = proj2.safe_div(z2);
-                x / (L::splat(2.0) * ((L::one() + x).sqrt() + L::one()))
-            }
+        let z = w.z.abs();
+        match self.kind {
+            // The form without cancellation: p^2 / (2 (sqrt(z^2 + p^2) + |z|)).
+            NdfKind::Ggx => proj2.safe_div(L::splat(2.0) * ((z * z + proj2).sqrt() + z)),
             NdfKind::Beckmann => {
-                // a = 1 / (alpha tan theta); Lambda = (exp(-a^2) / (a sqrt(pi)) - erfc(a)) / 2.
-                // Along the normal (proj2 = 0) a is infinite and Lambda 0.
-                let a = L::select(proj2.gt(L::zero()), w.z.abs().safe_div(proj2.sqrt()), big);
-                let lam =
-                    L::splat(0.5) * ((-(a * a)).exp() * L::splat(INV_SQRT_PI) / a - erfc_nonneg(a));
-                // Lambda < 1e-9 past a = 4, where the two terms cancel in f32.
-                L::select(a.lt(L::splat(4.0)), lam.max(L::zero()), L::zero())
+                let p = proj2.sqrt();
+                let a = z.safe_div(p);
+                let lam = L::splat(0.5)
+                    * (p * (-(a * a)).exp() * L::splat(INV_SQRT_PI) - z * erfc_nonneg(a));
+                // Lambda < 1e-9 past a = 4, where the two terms cancel in f32; along the
+                // normal (p = 0) a is 0 by safe_div but Lambda is 0.
+                L::select(
+                    a.lt(L::splat(4.0)) & p.gt(L::zero()),
+                    lam.max(L::zero()),
+                    L::zero(),
+                )
             }
-        };
-        let grazing = z2.eq(L::zero()) & proj2.gt(L::zero());
-        L::select(grazing, big, value.min(big))
+        }
     }
 
-    /// Smith masking `G1(w) = 1 / (1 + Lambda(w))`.
+    /// Smith masking `G1(w) = 1 / (1 + Lambda(w)) = |w.z| / (|w.z| + Lambda |w.z|)`.
     #[inline(always)]
     pub fn g1(&self, w: Vec3<L>) -> L {
-        L::one() / (L::one() + self.lambda(w))
+        let z = w.z.abs();
+        z.safe_div(z + self.lambda_cos(w))
+    }
+
+    /// `G1(w) / |w.z| = 1 / (|w.z| + Lambda(w) |w.z|)`: finite as `|w.z| -> 0`, where
+    /// `G1` vanishes like `|w.z|`.
+    #[inline(always)]
+    pub fn g1_over_cos(&self, w: Vec3<L>) -> L {
+        L::one().safe_div(w.z.abs() + self.lambda_cos(w))
     }
 
     /// Height-correlated masking-shadowing `G2 = 1 / (1 + Lambda(wo) + Lambda(wi))` (Heitz 2014 eq. 99).
     #[inline(always)]
     pub fn g2(&self, wo: Vec3<L>, wi: Vec3<L>) -> L {
-        L::one() / (L::one() + self.lambda(wo) + self.lambda(wi))
+        wo.z.abs() * self.g2_over_cos_o(wo, wi)
     }
 
-    /// Density of visible normals `D_w(m) = G1(w) |w.m| D(m) / |w.z|` (Heitz 2014 eq. 38).
+    /// `G2(wo, wi) / |wo.z|`, multiplied out by `|wo.z| |wi.z|` (so no `Lambda` diverges):
+    /// `|cos_i| / (|cos_o cos_i| + |cos_i| Lambda_o |cos_o| + |cos_o| Lambda_i |cos_i|)`.
+    /// For GGX this is Heitz 2014's closed form `2 |cos_i| / (|cos_i| sqrt(cos_o^2 +
+    /// p_o^2) + |cos_o| sqrt(cos_i^2 + p_i^2))`. Finite as `|wo.z| -> 0`.
+    #[inline(always)]
+    pub fn g2_over_cos_o(&self, wo: Vec3<L>, wi: Vec3<L>) -> L {
+        let (zo, zi) = (wo.z.abs(), wi.z.abs());
+        let denom = zo * zi + zi * self.lambda_cos(wo) + zo * self.lambda_cos(wi);
+        zi.safe_div(denom)
+    }
+
+    /// Density of visible normals `D_w(m) = G1(w) |w.m| D(m) / |w.z|` (Heitz 2014 eq. 38),
+    /// through [`Self::g1_over_cos`] so that it stays finite at grazing `w`.
     #[inline(always)]
     pub fn pdf_visible(&self, w: Vec3<L>, m: Vec3<L>) -> L {
-        (self.g1(w) * w.dot(m).abs() * self.d(m)).safe_div(w.z.abs())
+        self.g1_over_cos(w) * w.dot(m).abs() * self.d(m)
     }
 
     /// Sample a visible normal for `w` (flipped to the upper hemisphere when below it).

@@ -123,12 +123,12 @@ impl Model for Conductor {
             return Eval::zero();
         }
         let h = (wo + wi).normalize();
-        let d = p.dist.d(h);
-        // The cos_i of eval's cosine-weighted value cancels the BRDF's 1 / cos_i.
-        let inv_4cos_o = L::select(ok, L::splat(0.25) / wo.z, L::zero());
-        let value = p.fresnel.eval(wo.dot(h)) * (d * p.dist.g2(wo, wi) * inv_4cos_o);
+        // The cos_i of eval's cosine-weighted value cancels the BRDF's 1 / cos_i; the
+        // 1 / cos_o goes into G2 and G1, which vanish like cos_o at grazing.
+        let d = L::select(ok, L::splat(0.25) * p.dist.d(h), L::zero());
+        let value = p.fresnel.eval(wo.dot(h)) * (d * p.dist.g2_over_cos_o(wo, wi));
         // pdf = D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 cos_o)  (Heitz 2018 eq. 17).
-        let pdf = p.dist.g1(wo) * d * inv_4cos_o;
+        let pdf = p.dist.g1_over_cos(wo) * d;
         Eval { value, pdf }
     }
 

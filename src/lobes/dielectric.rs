@@ -70,6 +70,12 @@ fn refract<L: Lane>(w: Vec3<L>, n: Vec3<L>, eta: L) -> (Vec3<L>, L, L::Mask) {
     (wt, eta, ok)
 }
 
+/// `a b > 0`, without the product's underflow to 0 at denormal cosines.
+#[inline(always)]
+fn same_sign<L: Lane>(a: L, b: L) -> L::Mask {
+    (a * L::one().copysign(b)).gt(L::zero()) & b.abs().gt(L::zero())
+}
+
 /// The radiance-transport scale of a transmitted path, `1 / eta'^2`.
 #[inline(always)]
 fn transmission_scale<L: Lane>(etap: L, mode: Transport) -> L {
@@ -92,19 +98,20 @@ impl Dielectric {
         reflect: L::Mask,
         mode: Transport,
     ) -> (L, L) {
-        let cos_o = wo.z;
         let (wo_m, wi_m) = (wo.dot(wm), wi.dot(wm));
         let f = fresnel::dielectric(wo_m, p.eta);
         let d = p.dist.d(wm);
-        let g = p.dist.g2(wo, wi);
-        let pdf_m = p.dist.pdf_visible(wo, wm);
-        let refl_value = (f * d * g).safe_div(L::splat(4.0) * cos_o.abs());
-        let refl_pdf = (pdf_m * f).safe_div(L::splat(4.0) * wo_m.abs());
+        // G2 / |cos_o| and G1 / |cos_o| stay finite at grazing wo, where both vanish.
+        let g = p.dist.g2_over_cos_o(wo, wi);
+        let g1 = p.dist.g1_over_cos(wo);
+        let refl_value = L::splat(0.25) * f * d * g;
+        // D_wo(m) F / (4 |wo.m|) with D_wo = G1 |wo.m| D / |cos_o|.
+        let refl_pdf = L::splat(0.25) * g1 * d * f;
         let denom = (wi_m + wo_m / etap).sqr();
         let t = L::one() - f;
-        let trans_value = (t * d * g * (wi_m * wo_m).abs()).safe_div(cos_o.abs() * denom)
-            * transmission_scale(etap, mode);
-        let trans_pdf = (pdf_m * wi_m.abs() * t).safe_div(denom);
+        let trans_value =
+            (t * d * g * (wi_m * wo_m).abs()).safe_div(denom) * transmission_scale(etap, mode);
+        let trans_pdf = (p.dist.pdf_visible(wo, wm) * wi_m.abs() * t).safe_div(denom);
         (
             L::select(reflect, refl_value, trans_value),
             L::select(reflect, refl_pdf, trans_pdf),
@@ -208,7 +215,7 @@ impl Model for Dielectric {
     #[inline(always)]
     fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L> {
         let (cos_o, cos_i) = (wo.z, wi.z);
-        let reflect = (cos_o * cos_i).gt(L::zero());
+        let reflect = same_sign(cos_o, cos_i);
         let etap = L::select(
             reflect,
             L::one(),
@@ -223,8 +230,8 @@ impl Model for Dielectric {
             & cos_i.abs().gt(L::zero())
             & cos_o.abs().gt(L::zero())
             & wm_raw.length_squared().gt(L::zero())
-            & (wm.dot(wi) * cos_i).gt(L::zero())
-            & (wm.dot(wo) * cos_o).gt(L::zero());
+            & same_sign(wm.dot(wi), cos_i)
+            & same_sign(wm.dot(wo), cos_o);
         if !valid.any() {
             return Eval::zero();
         }
@@ -252,8 +259,8 @@ impl Model for Dielectric {
         let (wt, etap_t, no_tir) = refract(wo, wm, p.eta);
         let wi = Vec3::select(reflect, wo.reflect(wm), wt);
         let etap = L::select(reflect, L::one(), etap_t);
-        let same_side = (wo.z * wi.z).gt(L::zero());
-        let opposite = (wo.z * wi.z).lt(L::zero());
+        let same_side = same_sign(wo.z, wi.z);
+        let opposite = same_sign(-wo.z, wi.z);
         let valid = (reflect & same_side) | (!reflect & no_tir & opposite);
         // Smooth: the discrete probabilities F and 1 - F, value the same fraction.
         let t_scale = transmission_scale(etap, mode);
