@@ -1,12 +1,23 @@
 //! Directional albedo of single-scattering microfacet lobes, tabulated once per
 //! distribution at first use and read with linear interpolation.
 //!
-//! Reflection ([`ReflectionTable`]): with `c = wo.m` and Schlick's `s = (1 - c)^5`, a
-//! Fresnel fitted as `F0 (1 - s) + F90 s - a c (1 - c)^6`
-//! (`FresnelModel::split_sum_fit`) makes the albedo `F0 A + F90 B - a C`, where
-//! `A = E[(1 - s) G2/G1]`, `B = E[s G2/G1]`, `C = E[c (1 - c)^6 G2/G1]` over visible
-//! normals `m` and reflected directions above the surface. Grid: 32 (`mu = cos theta_o`)
-//! x 48 (`r = sqrt(alpha)` in [0, 1.5]), 16 x 16 strata per cell.
+//! Reflection ([`ReflectionTable`]): the albedo of a lobe with Fresnel `F(c)`, `c = wo.m`,
+//! is `E[F(c) G2/G1]` over visible normals `m` and reflected directions above the surface.
+//! With `F` replaced by its piecewise-linear interpolant on the nodes `c_k = (k / 12)^2`
+//! (dense toward grazing, where conductor curves bend), this is `sum_k F(c_k) H_k` with
+//! `H_k = E[hat_k(c) G2/G1]`: one table serves every Fresnel model (Schlick, exact
+//! conductor, artistic) with only the interpolation error of `F` in `c`. Isotropic grid:
+//! 32 `mu = cos theta_o` nodes at `sqrt(mu)` spacing (dense toward grazing) x 48
+//! `r = sqrt(alpha)` in [0, 1.5] (the dielectric reads it at the root-mean-square alpha of
+//! anisotropic lobes, up to 2.25), 16 x 16 strata per cell.
+//!
+//! Anisotropic lobes ([`ReflectionTable::get_anisotropic`], computed at the first
+//! anisotropic lookup) add two axes: the aspect `log10(alpha_x / alpha_y)` in [0, 1]
+//! (Burley's mapping reaches 10 at `anisotropic = 1`), and the azimuth of `wo` from the
+//! wider axis in [0, 90] degrees; `r` is the geometric mean `sqrt(sqrt(alpha_x alpha_y))`.
+//! The albedo is not a function of the projected roughness `alpha_o` alone (at normal
+//! incidence it depends on both axes while `alpha_o` is undefined), hence the table.
+//! 16 x 16 strata per cell, warped toward both ends of `u0`.
 //!
 //! Dielectric ([`DielectricTable`]): `E[F G2/G1]` (reflection) and `E[(1 - F) G2/G1]`
 //! (transmission, importance transport) over visible normals, on a 17 x 17 x 17 grid in
@@ -16,34 +27,55 @@
 //! separately, 8 x 8 strata per cell;
 //! `t` beyond the grid (`eta'` above 39 or below 1/39) is clamped.
 //!
-//! Anisotropic lobes use the root-mean-square alpha, an isotropic stand-in whose error
-//! grows with anisotropy (measured up to 39% at `anisotropic = 0.7`, roughness 1: the
-//! true albedo also depends on the azimuth of `wo`). The tables' errors against
-//! numerical integration are measured in the tests and by the verification harness.
+//! The tables' errors against numerical integration are measured in tests/albedo.rs and
+//! by the verification harness.
 
-use crate::fresnel;
-use crate::math::{Lane, Vec3};
+use crate::fresnel::{self, FresnelModel};
+use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::microfacet::{Distribution, NdfKind};
 use std::sync::OnceLock;
 
+/// `mu` nodes of the reflection tables.
 const N: usize = 32;
-/// Rows of the reflection table in `r = sqrt(alpha)`, spanning [0, R_MAX] at the spacing of
-/// the `mu` columns, so anisotropic lobes' effective alpha (up to 2.25) stays on the grid.
+/// Rows of the isotropic reflection table in `r = sqrt(alpha)`, spanning [0, R_MAX].
 const NR: usize = 48;
 const R_MAX: f32 = 1.5;
 const STRATA: usize = 16;
+/// Intervals of the piecewise-linear Fresnel interpolant; nodes `c_k = (k / FRESNEL_K)^2`.
+const FRESNEL_K: usize = 12;
+/// Fresnel nodes, the channels of a reflection table cell.
+pub const FRESNEL_NODES: usize = FRESNEL_K + 1;
+/// Rows of the anisotropic table in `r`: the isotropic rows up to `r = 1.02`.
+const NR_ANISO: usize = 33;
+/// Aspect nodes, `log10(alpha_x / alpha_y)` in [0, 1].
+const NS: usize = 6;
+/// Azimuth nodes in [0, 90] degrees from the wider axis.
+const NP: usize = 7;
+const ANISO_STRATA: usize = 16;
 
-/// Stratified quadrature points `(u0, u1, weight)` on the unit square. With `warp`,
-/// denser toward `u0 = 1` (`u0 = 1 - (1 - v)^2`, weighted by its Jacobian `2 (1 - v)`),
-/// where the visible-normal samplers put the distribution's far tail.
-fn strata(n: usize, warp: bool) -> impl Iterator<Item = (f32, f32, f64)> {
+/// Where [`strata`] concentrates its `u0` points.
+#[derive(Clone, Copy)]
+enum Warp {
+    None,
+    /// Toward `u0 = 1`, where the visible-normal samplers put the distribution's far tail:
+    /// `u0 = 1 - (1 - v)^2`.
+    Tail,
+    /// Toward both ends, `u0 = v^2 (3 - 2 v)`: also the normals near the center of the
+    /// projected disk, the only ones that reflect above the surface when a wide
+    /// anisotropic axis tilts most facets.
+    BothEnds,
+}
+
+/// Stratified quadrature points `(u0, u1, weight)` on the unit square, `u0` warped by
+/// `warp` and weighted by its Jacobian.
+fn strata(n: usize, warp: Warp) -> impl Iterator<Item = (f32, f32, f64)> {
     (0..n * n).map(move |k| {
         let (i, j) = (k / n, k % n);
         let v = (i as f64 + 0.5) / n as f64;
-        let (u0, jacobian) = if warp {
-            (1.0 - (1.0 - v) * (1.0 - v), 2.0 * (1.0 - v))
-        } else {
-            (v, 1.0)
+        let (u0, jacobian) = match warp {
+            Warp::None => (v, 1.0),
+            Warp::Tail => (1.0 - (1.0 - v) * (1.0 - v), 2.0 * (1.0 - v)),
+            Warp::BothEnds => (v * v * (3.0 - 2.0 * v), 6.0 * v * (1.0 - v)),
         };
         (
             u0 as f32,
@@ -76,28 +108,77 @@ fn grid_distribution(kind: NdfKind, r: f32) -> Distribution<f32> {
     }
 }
 
-/// The lookup roughness of a (possibly anisotropic) distribution: `sqrt` of the
-/// root-mean-square alpha, which tracks the energy of anisotropic lobes better than the
-/// geometric mean (the wider axis dominates the shadowing of reflected directions).
+/// The roughness axis of the anisotropic table: `sqrt` of the geometric-mean alpha.
 #[inline(always)]
-fn lookup_roughness<L: Lane>(dist: &Distribution<L>) -> L {
+fn mean_roughness<L: Lane>(dist: &Distribution<L>) -> L {
+    (dist.alpha_x * dist.alpha_y).sqrt().sqrt()
+}
+
+/// The isotropic stand-in roughness of the dielectric table: `sqrt` of the
+/// root-mean-square alpha, which tracks the energy of anisotropic lobes better than the
+/// geometric mean (the wider axis dominates the shadowing); its error is measured in
+/// tests/albedo.rs.
+#[inline(always)]
+pub fn rms_roughness<L: Lane>(dist: &Distribution<L>) -> L {
     (L::splat(0.5) * (dist.alpha_x * dist.alpha_x + dist.alpha_y * dist.alpha_y))
         .sqrt()
         .sqrt()
 }
 
-/// `wo` at `cos theta = mu` in the xz-plane.
-fn direction(mu: f32) -> Vec3<f32> {
-    Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
+/// `wo` at `cos theta = mu` and azimuth `phi`.
+fn direction(mu: f32, phi: f32) -> Vec3<f32> {
+    let sin = (1.0 - mu * mu).max(0.0).sqrt();
+    Vec3::new(sin * phi.cos(), sin * phi.sin(), mu)
 }
 
-/// The `A`, `B` and `C` tables of one distribution, `NR x N`, indexed `[r][mu]`.
+/// `mu` at node `i` of the reflection tables' `sqrt(mu)` axis; `mu = 0` has no albedo of
+/// its own: the limit from just above.
+fn reflection_mu(i: usize) -> f32 {
+    let x = i as f32 / (N - 1) as f32;
+    (x * x).max(1e-4)
+}
+
+/// Fresnel node `k`, `c_k = (k / FRESNEL_K)^2`.
+fn fresnel_node(k: usize) -> f32 {
+    let x = k as f32 / FRESNEL_K as f32;
+    x * x
+}
+
+/// `H_k` (the [`FRESNEL_NODES`] hat-function weights of `E[F(c) G2/G1]`) for `wo`.
+fn reflection_cell(
+    dist: &Distribution<f32>,
+    wo: Vec3<f32>,
+    strata_n: usize,
+    warp: Warp,
+) -> [f64; FRESNEL_NODES] {
+    let g1 = dist.g1(wo);
+    let mut h = [0.0f64; FRESNEL_NODES];
+    for (u0, u1, q) in strata(strata_n, warp) {
+        let m = dist.sample_visible(wo, u0, u1);
+        let wi = wo.reflect(m);
+        if wi.z <= 0.0 {
+            continue;
+        }
+        let w = q * f64::from(dist.g2(wo, wi) / g1);
+        let c = f64::from(wo.dot(m).clamp(0.0, 1.0));
+        let x = c.sqrt() * FRESNEL_K as f64;
+        let j = (x.floor() as usize).min(FRESNEL_K - 1);
+        let (c0, c1) = (f64::from(fresnel_node(j)), f64::from(fresnel_node(j + 1)));
+        let t = ((c - c0) / (c1 - c0)).clamp(0.0, 1.0);
+        h[j] += w * (1.0 - t);
+        h[j + 1] += w * t;
+    }
+    h
+}
+
+/// The hat-function weights `H_k` of one distribution, `FRESNEL_NODES` per cell.
+/// Isotropic: cells `[r][mu]`; anisotropic: `[phi][aspect][r][mu]`.
 pub struct ReflectionTable {
-    abc: [Vec<f32>; 3],
+    h: Vec<f32>,
 }
 
 impl ReflectionTable {
-    /// The table for `kind`, computed on first use.
+    /// The isotropic table for `kind`, computed on first use.
     pub fn get(kind: NdfKind) -> &'static ReflectionTable {
         static GGX: OnceLock<ReflectionTable> = OnceLock::new();
         static BECKMANN: OnceLock<ReflectionTable> = OnceLock::new();
@@ -107,50 +188,185 @@ impl ReflectionTable {
         }
     }
 
+    /// The anisotropic table for `kind`, computed on first use.
+    pub fn get_anisotropic(kind: NdfKind) -> &'static ReflectionTable {
+        static GGX: OnceLock<ReflectionTable> = OnceLock::new();
+        static BECKMANN: OnceLock<ReflectionTable> = OnceLock::new();
+        match kind {
+            NdfKind::Ggx => GGX.get_or_init(|| ReflectionTable::compute_anisotropic(kind)),
+            NdfKind::Beckmann => {
+                BECKMANN.get_or_init(|| ReflectionTable::compute_anisotropic(kind))
+            }
+        }
+    }
+
     fn compute(kind: NdfKind) -> ReflectionTable {
-        let mut abc = [vec![0.0; NR * N], vec![0.0; NR * N], vec![0.0; NR * N]];
+        let mut h = Vec::with_capacity(NR * N * FRESNEL_NODES);
         for ri in 0..NR {
             let dist = grid_distribution(kind, R_MAX * ri as f32 / (NR - 1) as f32);
             for mi in 0..N {
-                // mu = 0 has no albedo of its own: use the limit from just above.
-                let wo = direction((mi as f32 / (N - 1) as f32).max(1e-3));
-                let g1 = dist.g1(wo);
-                let mut sum = [0.0f64; 3];
-                for (u0, u1, q) in strata(STRATA, true) {
-                    let m = dist.sample_visible(wo, u0, u1);
-                    let wi = wo.reflect(m);
-                    if wi.z <= 0.0 {
+                let wo = direction(reflection_mu(mi), 0.0);
+                let cell = reflection_cell(&dist, wo, STRATA, Warp::Tail);
+                h.extend(cell.map(|v| v as f32));
+            }
+        }
+        ReflectionTable { h }
+    }
+
+    fn compute_anisotropic(kind: NdfKind) -> ReflectionTable {
+        let iso = ReflectionTable::get(kind);
+        let cell_size = N * FRESNEL_NODES;
+        let mut h = Vec::with_capacity(NP * NS * NR_ANISO * cell_size);
+        for pi in 0..NP {
+            let phi = std::f32::consts::FRAC_PI_2 * pi as f32 / (NP - 1) as f32;
+            for si in 0..NS {
+                let sqrt_ratio = 10f32.powf(0.5 * si as f32 / (NS - 1) as f32);
+                for ri in 0..NR_ANISO {
+                    let r = R_MAX * ri as f32 / (NR - 1) as f32;
+                    if si == 0 {
+                        h.extend_from_slice(&iso.h[ri * cell_size..(ri + 1) * cell_size]);
                         continue;
                     }
-                    let w = q * f64::from(dist.g2(wo, wi) / g1);
-                    let c = f64::from(wo.dot(m).clamp(0.0, 1.0));
-                    let s = (1.0 - c).powi(5);
-                    sum[0] += w * (1.0 - s);
-                    sum[1] += w * s;
-                    sum[2] += w * c * (1.0 - c).powi(6);
-                }
-                for (table, total) in abc.iter_mut().zip(sum) {
-                    table[ri * N + mi] = total as f32;
+                    let alpha = (r * r).max(crate::microfacet::MIN_ALPHA);
+                    let dist = Distribution {
+                        kind,
+                        alpha_x: alpha * sqrt_ratio,
+                        alpha_y: alpha / sqrt_ratio,
+                    };
+                    for mi in 0..N {
+                        let wo = direction(reflection_mu(mi), phi);
+                        let cell = reflection_cell(&dist, wo, ANISO_STRATA, Warp::BothEnds);
+                        h.extend(cell.map(|v| v as f32));
+                    }
                 }
             }
         }
-        ReflectionTable { abc }
+        ReflectionTable { h }
     }
 
-    /// `(A, B, C)` at `mu = cos theta_o` and the distribution's roughness.
+    /// Isotropic lanes: the grid corners `(index, weight)` of `(mu, r)`.
     #[inline(always)]
-    pub fn lookup<L: Lane>(&self, mu: L, dist: &Distribution<L>) -> [L; 3] {
-        let (x0, fx) = grid(mu, N);
-        let (y0, fy) = grid(lookup_roughness(dist) * L::splat(1.0 / R_MAX), NR);
+    fn corners_isotropic<L: Lane>(mu: L, r: L) -> [(L, L); 4] {
+        let (x0, fx) = grid(mu.max(L::zero()).sqrt(), N);
+        let (y0, fy) = grid(r * L::splat(1.0 / R_MAX), NR);
         let base = y0 * L::splat(N as f32) + x0;
         let row = L::splat(N as f32);
-        let [a, b, c] = &self.abc;
+        let (gx, gy) = (L::one() - fx, L::one() - fy);
         [
-            bilerp(a, base, L::one(), row, fx, fy),
-            bilerp(b, base, L::one(), row, fx, fy),
-            bilerp(c, base, L::one(), row, fx, fy),
+            (base, gx * gy),
+            (base + L::one(), fx * gy),
+            (base + row, gx * fy),
+            (base + row + L::one(), fx * fy),
         ]
     }
+
+    /// Anisotropic lanes: the 16 grid corners `(cell index, weight)` of
+    /// `(mu, r, aspect, azimuth)` for `wo` and `dist`.
+    #[inline(always)]
+    fn corners_anisotropic<L: Lane>(wo: Vec3<L>, dist: &Distribution<L>) -> [(L, L); 16] {
+        let wide_x = dist.alpha_x.ge(dist.alpha_y);
+        let (wide, narrow) = (
+            dist.alpha_x.max(dist.alpha_y),
+            dist.alpha_x.min(dist.alpha_y),
+        );
+        let (along, across) = (
+            L::select(wide_x, wo.x, wo.y).abs(),
+            L::select(wide_x, wo.y, wo.x).abs(),
+        );
+        let phi = across.atan2(along) * L::splat(std::f32::consts::FRAC_2_PI);
+        let aspect = (wide / narrow).ln() * L::splat(1.0 / std::f32::consts::LN_10);
+        let r = mean_roughness(dist);
+        let (x0, fx) = grid(wo.z.max(L::zero()).sqrt(), N);
+        // The r axis is the isotropic one, truncated to NR_ANISO rows.
+        let r_pos = (r * L::splat((NR - 1) as f32 / R_MAX))
+            .clamp(L::zero(), L::splat((NR_ANISO - 1) as f32));
+        let y0 = r_pos.floor().min(L::splat((NR_ANISO - 2) as f32));
+        let fy = r_pos - y0;
+        let (z0, fz) = grid(aspect, NS);
+        let (w0, fw) = grid(phi, NP);
+        let axes = [
+            (x0, fx, 1.0),
+            (y0, fy, N as f32),
+            (z0, fz, (N * NR_ANISO) as f32),
+            (w0, fw, (N * NR_ANISO * NS) as f32),
+        ];
+        let mut base = L::zero();
+        for (i, _, stride) in axes {
+            base += i * L::splat(stride);
+        }
+        std::array::from_fn(|corner| {
+            let (mut index, mut weight) = (base, L::one());
+            for (bit, (_, f, stride)) in axes.iter().enumerate() {
+                if corner >> bit & 1 == 1 {
+                    index += L::splat(*stride);
+                    weight *= *f;
+                } else {
+                    weight *= L::one() - *f;
+                }
+            }
+            (index, weight)
+        })
+    }
+
+    /// `sum_corners weight H_k(corner)` for every Fresnel node.
+    #[inline(always)]
+    fn weights<L: Lane>(&self, corners: &[(L, L)]) -> [L; FRESNEL_NODES] {
+        let stride = L::splat(FRESNEL_NODES as f32);
+        let mut h = [L::zero(); FRESNEL_NODES];
+        for &(cell, weight) in corners {
+            let at = cell * stride;
+            for (k, hk) in h.iter_mut().enumerate() {
+                *hk = weight.mul_add(L::gather(&self.h, at + L::splat(k as f32)), *hk);
+            }
+        }
+        h
+    }
+
+    /// `H_k` for `wo` above the surface and `dist`, isotropic or not.
+    #[inline(always)]
+    fn lookup<L: Lane>(wo: Vec3<L>, dist: &Distribution<L>) -> [L; FRESNEL_NODES] {
+        let iso = ReflectionTable::get(dist.kind)
+            .weights(&Self::corners_isotropic(wo.z, mean_roughness(dist)));
+        let anisotropic = anisotropic(dist);
+        if !anisotropic.any() {
+            return iso;
+        }
+        let aniso = ReflectionTable::get_anisotropic(dist.kind)
+            .weights(&Self::corners_anisotropic(wo, dist));
+        std::array::from_fn(|k| L::select(anisotropic, aniso[k], iso[k]))
+    }
+
+    /// The single-scattering albedo `E[F(wo.m) G2/G1]` of a reflection lobe, for `wo`
+    /// above the surface.
+    #[inline(always)]
+    pub fn albedo<L: Lane>(
+        wo: Vec3<L>,
+        dist: &Distribution<L>,
+        fresnel: &FresnelModel<L>,
+    ) -> Rgb<L> {
+        let h = Self::lookup(wo, dist);
+        let mut sum = Rgb::zero();
+        for (k, hk) in h.into_iter().enumerate() {
+            sum = sum + fresnel.eval(L::splat(fresnel_node(k))) * hk;
+        }
+        sum.map(|v| v.max(L::zero()))
+    }
+
+    /// The shadowing albedo `E[G2/G1]` (the albedo with `F = 1`).
+    #[inline(always)]
+    pub fn shadowing<L: Lane>(wo: Vec3<L>, dist: &Distribution<L>) -> L {
+        Self::lookup(wo, dist)
+            .into_iter()
+            .fold(L::zero(), |a, b| a + b)
+    }
+}
+
+/// Lanes whose distribution is anisotropic (beyond rounding).
+#[inline(always)]
+fn anisotropic<L: Lane>(dist: &Distribution<L>) -> L::Mask {
+    dist.alpha_x
+        .max(dist.alpha_y)
+        .gt(dist.alpha_x.min(dist.alpha_y) * L::splat(1.0 + 1e-5))
 }
 
 /// Bilinear interpolation in `table` from index `base`, with `dx` and `dy` the index
@@ -231,7 +447,7 @@ impl DielectricTable {
                     let dist = grid_distribution(kind, R_MAX * ri as f32 / (DN - 1) as f32);
                     for mi in 0..DN {
                         let mu = critical_mu(mi as f32 / (DN - 1) as f32, eta);
-                        let (r, tr) = Self::integrate(&dist, direction(mu.max(1e-3)), eta);
+                        let (r, tr) = Self::integrate(&dist, direction(mu.max(1e-3), 0.0), eta);
                         let index = ((side * DN + ti) * DN + ri) * DN + mi;
                         reflect[index] = r;
                         transmit[index] = tr;
@@ -246,7 +462,7 @@ impl DielectricTable {
     fn integrate(dist: &Distribution<f32>, wo: Vec3<f32>, eta: f32) -> (f32, f32) {
         let g1 = dist.g1(wo);
         let (mut r, mut t) = (0.0f64, 0.0f64);
-        for (u0, u1, q) in strata(DIELECTRIC_STRATA, false) {
+        for (u0, u1, q) in strata(DIELECTRIC_STRATA, Warp::None) {
             let m = dist.sample_visible(wo, u0, u1);
             let c = wo.dot(m);
             let f = fresnel::dielectric(c, eta);
@@ -267,14 +483,14 @@ impl DielectricTable {
         (r as f32, t as f32)
     }
 
-    /// Reflected and transmitted albedo (importance transport) at `|mu|`, for the relative
-    /// IOR `eta'` seen from `wo`'s side.
+    /// Reflected and transmitted albedo (importance transport) at `|mu|` and isotropic
+    /// roughness `r = sqrt(alpha)`, for the relative IOR `eta'` seen from `wo`'s side.
     #[inline(always)]
-    pub fn lookup<L: Lane>(&self, mu: L, dist: &Distribution<L>, eta: L) -> (L, L) {
+    pub fn lookup<L: Lane>(&self, mu: L, r: L, eta: L) -> (L, L) {
         let t = (eta - L::one()).abs() / (eta + L::one());
         let side = L::select(eta.lt(L::one()), L::one(), L::zero());
         let (x0, fx) = grid(critical_coordinate(mu.abs(), eta), DN);
-        let (y0, fy) = grid(lookup_roughness(dist) * L::splat(1.0 / R_MAX), DN);
+        let (y0, fy) = grid(r * L::splat(1.0 / R_MAX), DN);
         let (z0, fz) = grid(t * L::splat(1.0 / T_MAX), DN);
         let n = L::splat(DN as f32);
         let base = ((side * n + z0) * n + y0) * n + x0;

@@ -106,29 +106,4 @@ impl<L: Lane> FresnelModel<L> {
             ),
         }
     }
-
-    /// Coefficients `(F0, F90, a)` of the fit `F(c) ~ F0 (1 - s) + F90 s - a c (1 - c)^6`
-    /// with `s = (1 - c)^5`, used by the albedo tables. Exact for Schlick (`a = 0`); for
-    /// conductors the Lazanyi-Schlick term is fitted to the exact curve at `c = 1/7`,
-    /// where `c (1 - c)^6` peaks (Hoffman 2019, "Fresnel Equations Considered Harmful").
-    #[inline(always)]
-    pub fn split_sum_fit(&self) -> (Rgb<L>, Rgb<L>, Rgb<L>) {
-        match self {
-            FresnelModel::Schlick { f0, f90 } => (*f0, *f90, Rgb::zero()),
-            FresnelModel::Conductor { .. } => {
-                const C: f32 = 1.0 / 7.0;
-                let peak = L::splat(
-                    C * (1.0 - C) * (1.0 - C) * (1.0 - C) * (1.0 - C) * (1.0 - C) * (1.0 - C),
-                );
-                let f0 = self.eval(L::one());
-                let exact = self.eval(L::splat(C));
-                let a = f0.zip(
-                    exact,
-                    #[inline(always)]
-                    |f0, f| (schlick(f0, L::one(), L::splat(C)) - f) / peak,
-                );
-                (f0, Rgb::splat(L::one()), a)
-            }
-        }
-    }
 }

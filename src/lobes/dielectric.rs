@@ -26,7 +26,7 @@
 
 use super::conductor::{DISTRIBUTION_CHOICES, ndf_kind};
 use super::{Eval, Model, Params, Sample, Transport, VerifyCase, flags};
-use crate::albedo_table::{DielectricTable, ReflectionTable};
+use crate::albedo_table::{DielectricTable, ReflectionTable, rms_roughness};
 use crate::fresnel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::microfacet::Distribution;
@@ -287,17 +287,18 @@ impl Model for Dielectric {
         let scale = transmission_scale(etap, mode);
         let f = fresnel::dielectric(cos_o, p.eta);
         let smooth = f + (L::one() - f) * scale;
-        let (r, t) = DielectricTable::get(p.dist.kind).lookup(cos_o, &p.dist, etap);
+        let up = Vec3::new(wo.x, wo.y, cos_o.abs());
+        let (r, t) = DielectricTable::get(p.dist.kind).lookup(cos_o, rms_roughness(&p.dist), etap);
         // Narrow lobes: the exact smooth albedo, times the microfacet shadowing loss of
         // reflection at this angle, is closer than the table, whose grid cannot follow
         // the total-internal-reflection edge sharper than its spacing.
-        let [a, b, _] = ReflectionTable::get(p.dist.kind).lookup(cos_o.abs(), &p.dist);
+        let shadowing = ReflectionTable::shadowing(up, &p.dist);
         let narrow = p
             .dist
             .alpha_x
             .max(p.dist.alpha_y)
             .lt(L::splat(NARROW_ALPHA));
-        let rough = L::select(narrow, smooth * (a + b), r + t * scale);
+        let rough = L::select(narrow, smooth * shadowing, r + t * scale);
         let albedo = L::select(p.smooth, smooth, rough);
         Rgb::splat(L::select(cos_o.eq(L::zero()), L::zero(), albedo))
     }
