@@ -33,7 +33,7 @@ pub enum Status {
 }
 
 impl Status {
-    pub const ALL: [Status; 21] = [
+    pub const ALL: [Status; 22] = [
         Status::Ok,
         Status::NullPointer,
         Status::InvalidArgument,
