@@ -722,6 +722,7 @@ glint_status glint_lobe_param_choice(const struct glint_runtime *runtime, uint32
 /*
  Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
  `capacity` (floats available at `out`) must be at least its `param_block_size`.
+ On failure all of `out[0 .. capacity)` is zeroed.
 
  # Safety
  `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.

@@ -541,6 +541,7 @@ pub unsafe extern "C" fn glint_lobe_param_choice(
 
 /// Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
 /// `capacity` (floats available at `out`) must be at least its `param_block_size`.
+/// On failure all of `out[0 .. capacity)` is zeroed.
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.
@@ -557,18 +558,21 @@ pub unsafe extern "C" fn glint_lobe_param_defaults(
         }
         // SAFETY: non-NULL and valid for `capacity` floats per the contract.
         let out = unsafe { std::slice::from_raw_parts_mut(out, capacity) };
-        out.fill(0.0);
-        // SAFETY: per the contract.
-        let rt = unsafe { runtime_ref(runtime) }?;
-        let t = rt.runtime.registry.get(id)?;
-        let size = params::block_size(t.params());
-        if capacity < size {
-            return Err(Error::new(
-                Status::OutOfRange,
-                format!("{} needs {size} floats; capacity is {capacity}", t.name()),
-            ));
-        }
-        params::write_defaults(t.params(), &mut out[..size]);
-        Ok(())
+        // Success writes only the block; failure zeroes all of `out`.
+        let defaults = |out: &mut [f32]| {
+            // SAFETY: per the contract.
+            let rt = unsafe { runtime_ref(runtime) }?;
+            let t = rt.runtime.registry.get(id)?;
+            let size = params::block_size(t.params());
+            if capacity < size {
+                return Err(Error::new(
+                    Status::OutOfRange,
+                    format!("{} needs {size} floats; capacity is {capacity}", t.name()),
+                ));
+            }
+            params::write_defaults(t.params(), &mut out[..size]);
+            Ok(())
+        };
+        defaults(out).inspect_err(|_| out.fill(0.0))
     })
 }
