@@ -21,6 +21,18 @@
 #define GLINT_VERSION_PATCH 0
 
 /*
+ Destroyed runtimes and arenas whose small handle shells stay readable, so that
+ using one is detected (`glint_runtime_destroy`, `glint_arena_destroy`).
+ */
+#define GLINT_QUARANTINE_SHELLS 1024
+
+/*
+ Most bytes of closure slots that destroyed arenas keep readable, so that using
+ one of their closures is detected (`glint_arena_destroy`).
+ */
+#define GLINT_QUARANTINE_BYTES (16 << 20)
+
+/*
  Most lobes in one closure.
  */
 #define GLINT_MAX_LOBES 16
@@ -51,16 +63,6 @@
 #define GLINT_PARAM_RGB 1
 
 #define GLINT_PARAM_ENUM 2
-
-/*
- Destroyed runtimes and arenas whose shells stay readable.
- */
-#define QUARANTINE_SHELLS 1024
-
-/*
- Most bytes of closure slots that destroyed arenas keep in the quarantine.
- */
-#define QUARANTINE_BYTES (16 << 20)
 
 /*
  An arena of closures owned by the caller; one thread at a time. A small shell
@@ -458,9 +460,9 @@ glint_status glint_arena_reset(struct glint_arena *arena);
  Destroy an arena and its closures (NULL is ignored). Afterwards a call with the
  arena or one of its closures returns `GLINT_ERROR_INVALID_HANDLE`, and destroying
  it again is ignored and leaves that message for `glint_last_error`. This holds
- while the arena is quarantined: its shell until `QUARANTINE_SHELLS` (1024) more
+ while the arena is quarantined: its shell until `GLINT_QUARANTINE_SHELLS` (1024) more
  runtimes and arenas were destroyed, its closure slots while the most recently
- destroyed arenas' slots total at most `QUARANTINE_BYTES` (16 MiB; an arena larger
+ destroyed arenas' slots total at most `GLINT_QUARANTINE_BYTES` (16 MiB; an arena larger
  than that frees them at once). Beyond that, for pointers never returned by this
  library and for calls that race with the destroy, the behaviour is undefined.
 
@@ -626,7 +628,7 @@ glint_status glint_runtime_create(const char *config, struct glint_runtime **out
  used afterwards: closure calls then return `GLINT_ERROR_INVALID_HANDLE`, as does a
  call on the destroyed runtime; destroying it again is ignored and leaves that
  message for `glint_last_error`. This holds while the handle's small shell is
- quarantined, that is until `QUARANTINE_SHELLS` (1024) more runtimes and arenas
+ quarantined, that is until `GLINT_QUARANTINE_SHELLS` (1024) more runtimes and arenas
  were destroyed; after that, and for pointers never returned by
  `glint_runtime_create`, the behaviour is undefined, as is a call that races with
  the destroy.
@@ -720,6 +722,7 @@ glint_status glint_lobe_param_choice(const struct glint_runtime *runtime, uint32
 /*
  Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
  `capacity` (floats available at `out`) must be at least its `param_block_size`.
+ On failure all of `out[0 .. capacity)` is zeroed.
 
  # Safety
  `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.

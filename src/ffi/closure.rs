@@ -26,13 +26,17 @@ pub struct glint_closure {
 impl glint_closure {
     /// The runtime the closure was built with, if it was not destroyed; a separate
     /// object, so its borrow does not hold the closure.
+    #[inline(always)]
     pub(crate) fn runtime<'r>(&self) -> Result<&'r LiveRuntime, Error> {
         // SAFETY: the runtime was live when the closure was built, and a destroyed
         // runtime's shell stays readable while quarantined (`glint_runtime_destroy`).
-        unsafe { &*self.runtime }
-            .live()
-            .map_err(|e| invalid(format!("the closure's {}", e.message)))
+        unsafe { &*self.runtime }.live().map_err(of_the_closure)
     }
+}
+
+#[cold]
+fn of_the_closure(e: Error) -> Error {
+    invalid(format!("the closure's {}", e.message))
 }
 
 /// The closure a handle names, checked: its slot's tag matches the handle's
@@ -40,6 +44,7 @@ impl glint_closure {
 ///
 /// # Safety
 /// `p` is NULL or a handle from a closure constructor (see `glint_arena_destroy`).
+#[inline(always)]
 pub(crate) unsafe fn closure_handle<'a>(
     p: *const glint_closure,
     what: &str,
@@ -177,6 +182,7 @@ fn vec3_out(v: Vec3<f32>) -> glint_vec3 {
 
 /// # Safety
 /// As [`closure_handle`].
+#[inline(always)]
 unsafe fn closure_ref<'a>(p: *const glint_closure) -> Result<&'a Closure, Error> {
     // SAFETY: forwarded contract.
     Ok(&unsafe { closure_handle(p, "closure") }?.closure)
@@ -225,9 +231,9 @@ pub unsafe extern "C" fn glint_arena_reset(arena: *mut glint_arena) -> glint_sta
 /// Destroy an arena and its closures (NULL is ignored). Afterwards a call with the
 /// arena or one of its closures returns `GLINT_ERROR_INVALID_HANDLE`, and destroying
 /// it again is ignored and leaves that message for `glint_last_error`. This holds
-/// while the arena is quarantined: its shell until `QUARANTINE_SHELLS` (1024) more
+/// while the arena is quarantined: its shell until `GLINT_QUARANTINE_SHELLS` (1024) more
 /// runtimes and arenas were destroyed, its closure slots while the most recently
-/// destroyed arenas' slots total at most `QUARANTINE_BYTES` (16 MiB; an arena larger
+/// destroyed arenas' slots total at most `GLINT_QUARANTINE_BYTES` (16 MiB; an arena larger
 /// than that frees them at once). Beyond that, for pointers never returned by this
 /// library and for calls that race with the destroy, the behaviour is undefined.
 ///
@@ -241,12 +247,10 @@ pub unsafe extern "C" fn glint_arena_destroy(arena: *mut glint_arena) {
         }
         // SAFETY: a handle from glint_arena_create, live or quarantined.
         let a = unsafe { &mut *arena };
-        check_tag(&a.tag, ARENA_LIVE, ARENA_DEAD, "arena")
-            .map_err(|e| invalid(format!("glint_arena_destroy ignored: {}", e.message)))?;
-        a.tag.set(ARENA_DEAD);
+        poison(&a.tag, ARENA_LIVE, ARENA_DEAD, "arena")?;
         a.clear(CLOSURE_DEAD);
         let mut bytes = a.arena.capacity() * std::mem::size_of::<glint_closure>();
-        if bytes > QUARANTINE_BYTES {
+        if bytes > GLINT_QUARANTINE_BYTES {
             a.arena.release();
             bytes = 0;
         }

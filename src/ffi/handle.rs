@@ -13,9 +13,9 @@
 //!   its runtime's tag.
 //!
 //! What stays undefined: pointers this library never returned; a destroyed runtime or
-//! arena handle used after [`QUARANTINE_SHELLS`] more runtimes and arenas were
+//! arena handle used after [`GLINT_QUARANTINE_SHELLS`] more runtimes and arenas were
 //! destroyed (its shell is then freed); closures of a destroyed arena whose slots
-//! exceeded [`QUARANTINE_BYTES`] or left the quarantine; a handle from exactly a
+//! exceeded [`GLINT_QUARANTINE_BYTES`] or left the quarantine; a handle from exactly a
 //! multiple of 65536 resets ago whose slot was reused; and calls that race with the
 //! destroy or reset of the handle they use.
 
@@ -24,11 +24,6 @@ use std::any::Any;
 use std::collections::VecDeque;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
-
-/// Destroyed runtimes and arenas whose shells stay readable.
-pub const QUARANTINE_SHELLS: usize = 1024;
-/// Most bytes of closure slots that destroyed arenas keep in the quarantine.
-pub const QUARANTINE_BYTES: usize = 16 << 20;
 
 pub(crate) const RUNTIME_LIVE: u64 = u64::from_be_bytes(*b"GLRTLIVE");
 pub(crate) const RUNTIME_DEAD: u64 = u64::from_be_bytes(*b"GLRTDEAD");
@@ -66,18 +61,40 @@ pub(crate) fn invalid(message: String) -> Error {
     Error::new(Status::InvalidHandle, message)
 }
 
-/// Why a runtime or arena tag is not `live`.
+/// Check a runtime or arena tag: one compare inline, the message out of line.
+#[inline(always)]
 pub(crate) fn check_tag(tag: &Tag, live: u64, dead: u64, what: &str) -> Result<(), Error> {
-    match tag.get() {
-        t if t == live => Ok(()),
-        t if t == dead => Err(invalid(format!("{what} was destroyed"))),
-        _ => Err(invalid(format!(
+    let t = tag.get();
+    if t == live {
+        Ok(())
+    } else {
+        Err(tag_error(t, dead, what))
+    }
+}
+
+/// Begin destroying a runtime or arena: unless its tag is live (the destroy is then
+/// ignored with this error), poison it.
+pub(crate) fn poison(tag: &Tag, live: u64, dead: u64, what: &str) -> Result<(), Error> {
+    check_tag(tag, live, dead, what)
+        .map_err(|e| invalid(format!("glint_{what}_destroy ignored: {}", e.message)))?;
+    tag.set(dead);
+    Ok(())
+}
+
+#[cold]
+#[inline(never)]
+fn tag_error(tag: u64, dead: u64, what: &str) -> Error {
+    if tag == dead {
+        invalid(format!("{what} was destroyed"))
+    } else {
+        invalid(format!(
             "{what} is not a {what} handle (another kind of handle, or freed memory)"
-        ))),
+        ))
     }
 }
 
 /// The tag of a closure slot built in `generation`.
+#[inline(always)]
 pub(crate) fn closure_tag(generation: u16) -> u64 {
     CLOSURE_LIVE | u64::from(generation)
 }
@@ -97,23 +114,35 @@ pub(crate) fn encode<T>(slot: *mut T, generation: u16) -> Result<*mut T, Error> 
 }
 
 /// The slot a closure handle points to and the generation it carries.
+#[inline(always)]
 pub(crate) fn decode<T>(handle: *const T) -> (*const T, u16) {
     let generation = (handle.addr() >> GENERATION_SHIFT) as u16;
     (handle.map_addr(|a| a & ADDRESS_MASK), generation)
 }
 
 /// Check a closure slot's tag against the generation of the handle that led to it.
+#[inline(always)]
 pub(crate) fn check_closure_tag(tag: &Tag, generation: u16, what: &str) -> Result<(), Error> {
-    match tag.get() {
-        t if t == closure_tag(generation) => Ok(()),
-        t if t & !0xffff == CLOSURE_LIVE => Err(invalid(format!(
+    let t = tag.get();
+    if t == closure_tag(generation) {
+        Ok(())
+    } else {
+        Err(closure_tag_error(t, what))
+    }
+}
+
+#[cold]
+#[inline(never)]
+fn closure_tag_error(tag: u64, what: &str) -> Error {
+    match tag {
+        t if t & !0xffff == CLOSURE_LIVE => invalid(format!(
             "{what} is stale: its arena was reset and the slot now holds a newer closure"
-        ))),
-        CLOSURE_RESET => Err(invalid(format!("{what} is stale: its arena was reset"))),
-        CLOSURE_DEAD => Err(invalid(format!("{what} belongs to a destroyed arena"))),
-        _ => Err(invalid(format!(
+        )),
+        CLOSURE_RESET => invalid(format!("{what} is stale: its arena was reset")),
+        CLOSURE_DEAD => invalid(format!("{what} belongs to a destroyed arena")),
+        _ => invalid(format!(
             "{what} is not a closure handle (another kind of handle, or freed memory)"
-        ))),
+        )),
     }
 }
 
@@ -148,7 +177,7 @@ pub(crate) fn quarantine(shell: Box<dyn Any>, bytes: usize) {
         _shell: shell,
         bytes,
     });
-    while q.shells.len() > QUARANTINE_SHELLS || q.bytes > QUARANTINE_BYTES {
+    while q.shells.len() > GLINT_QUARANTINE_SHELLS || q.bytes > GLINT_QUARANTINE_BYTES {
         let Some(old) = q.shells.pop_front() else {
             break;
         };
@@ -191,12 +220,12 @@ mod tests {
 
     #[test]
     fn the_quarantine_keeps_its_bounds() {
-        for _ in 0..QUARANTINE_SHELLS + 10 {
-            quarantine(Box::new(0u8), QUARANTINE_BYTES / 4);
+        for _ in 0..GLINT_QUARANTINE_SHELLS + 10 {
+            quarantine(Box::new(0u8), GLINT_QUARANTINE_BYTES / 4);
         }
         let q = QUARANTINE.lock().unwrap();
-        assert!(q.shells.len() <= QUARANTINE_SHELLS);
-        assert!(q.bytes <= QUARANTINE_BYTES);
+        assert!(q.shells.len() <= GLINT_QUARANTINE_SHELLS);
+        assert!(q.bytes <= GLINT_QUARANTINE_BYTES);
         assert_eq!(q.bytes, q.shells.iter().map(|p| p.bytes).sum::<usize>());
     }
 }

@@ -14,7 +14,6 @@ mod runtime;
 
 pub use batch::*;
 pub use closure::*;
-pub use handle::{QUARANTINE_BYTES, QUARANTINE_SHELLS};
 pub use runtime::*;
 
 use crate::error::{Error, Status};
@@ -63,6 +62,13 @@ pub const GLINT_ERROR_OUT_OF_MEMORY: glint_status = 21;
 pub const GLINT_VERSION_MAJOR: u32 = 0;
 pub const GLINT_VERSION_MINOR: u32 = 1;
 pub const GLINT_VERSION_PATCH: u32 = 0;
+
+/// Destroyed runtimes and arenas whose small handle shells stay readable, so that
+/// using one is detected (`glint_runtime_destroy`, `glint_arena_destroy`).
+pub const GLINT_QUARANTINE_SHELLS: usize = 1024;
+/// Most bytes of closure slots that destroyed arenas keep readable, so that using
+/// one of their closures is detected (`glint_arena_destroy`).
+pub const GLINT_QUARANTINE_BYTES: usize = 16 << 20;
 
 /// Most lobes in one closure.
 pub const GLINT_MAX_LOBES: u32 = 16;
@@ -175,18 +181,21 @@ trait Output: Sized32 {
 }
 
 /// Check that a caller's struct is at least as large as this library's version of it.
+#[inline(always)]
 fn check_size<T: Sized32>(s: &T, what: &str) -> Result<(), Error> {
     let need = std::mem::size_of::<T>();
     if (s.struct_size() as usize) < need {
-        return Err(Error::new(
-            Status::StructSize,
-            format!(
-                "{what}.struct_size is {} but this library needs {need}",
-                s.struct_size()
-            ),
-        ));
+        return Err(struct_size_error(s.struct_size(), need, what));
     }
     Ok(())
+}
+
+#[cold]
+fn struct_size_error(size: u32, need: usize, what: &str) -> Error {
+    Error::new(
+        Status::StructSize,
+        format!("{what}.struct_size is {size} but this library needs {need}"),
+    )
 }
 
 /// Output pointer to a struct that begins with `struct_size`, checked and set to its
@@ -195,6 +204,7 @@ fn check_size<T: Sized32>(s: &T, what: &str) -> Result<(), Error> {
 ///
 /// # Safety
 /// As [`deref_mut`].
+#[inline(always)]
 unsafe fn out_struct<'a, T: Output>(p: *mut T, what: &str) -> Result<&'a mut T, Error> {
     // SAFETY: forwarded contract.
     let s = unsafe { deref_mut(p, what) }?;
@@ -208,6 +218,7 @@ unsafe fn out_struct<'a, T: Output>(p: *mut T, what: &str) -> Result<&'a mut T, 
 ///
 /// # Safety
 /// `p` is NULL or valid for writes.
+#[inline(always)]
 unsafe fn out_value<'a, T>(p: *mut T, what: &str, failed: T) -> Result<&'a mut T, Error> {
     // SAFETY: forwarded contract.
     let out = unsafe { deref_mut(p, what) }?;

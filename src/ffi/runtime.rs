@@ -48,19 +48,17 @@ impl glint_runtime {
         }
     }
 
-    /// The runtime's contents, or `GLINT_ERROR_INVALID_HANDLE` once destroyed.
+    /// The runtime's contents, or `GLINT_ERROR_INVALID_HANDLE` once destroyed (the
+    /// tag says so; the contents are gone).
+    #[inline(always)]
     pub(crate) fn live(&self) -> Result<&LiveRuntime, Error> {
         check_tag(&self.tag, RUNTIME_LIVE, RUNTIME_DEAD, "runtime")?;
-        self.live
-            .as_deref()
-            .ok_or_else(|| invalid("runtime was destroyed".into()))
+        self.live.as_deref().ok_or_else(destroyed)
     }
 
     fn live_mut(&mut self) -> Result<&mut LiveRuntime, Error> {
         check_tag(&self.tag, RUNTIME_LIVE, RUNTIME_DEAD, "runtime")?;
-        self.live
-            .as_deref_mut()
-            .ok_or_else(|| invalid("runtime was destroyed".into()))
+        self.live.as_deref_mut().ok_or_else(destroyed)
     }
 }
 
@@ -86,6 +84,11 @@ impl LiveRuntime {
                 }
             }));
     }
+}
+
+#[cold]
+fn destroyed() -> Error {
+    invalid("runtime was destroyed".into())
 }
 
 /// A live runtime from a handle the caller promises is NULL or from
@@ -239,7 +242,7 @@ pub unsafe extern "C" fn glint_runtime_create(
 /// used afterwards: closure calls then return `GLINT_ERROR_INVALID_HANDLE`, as does a
 /// call on the destroyed runtime; destroying it again is ignored and leaves that
 /// message for `glint_last_error`. This holds while the handle's small shell is
-/// quarantined, that is until `QUARANTINE_SHELLS` (1024) more runtimes and arenas
+/// quarantined, that is until `GLINT_QUARANTINE_SHELLS` (1024) more runtimes and arenas
 /// were destroyed; after that, and for pointers never returned by
 /// `glint_runtime_create`, the behaviour is undefined, as is a call that races with
 /// the destroy.
@@ -254,9 +257,7 @@ pub unsafe extern "C" fn glint_runtime_destroy(runtime: *mut glint_runtime) {
         }
         // SAFETY: a handle from glint_runtime_create, live or quarantined.
         let rt = unsafe { &mut *runtime };
-        check_tag(&rt.tag, RUNTIME_LIVE, RUNTIME_DEAD, "runtime")
-            .map_err(|e| invalid(format!("glint_runtime_destroy ignored: {}", e.message)))?;
-        rt.tag.set(RUNTIME_DEAD);
+        poison(&rt.tag, RUNTIME_LIVE, RUNTIME_DEAD, "runtime")?;
         rt.live = None;
         // SAFETY: created by Box::into_raw in glint_runtime_create; the tag is now
         // dead, so no later call takes ownership again.
@@ -540,6 +541,7 @@ pub unsafe extern "C" fn glint_lobe_param_choice(
 
 /// Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
 /// `capacity` (floats available at `out`) must be at least its `param_block_size`.
+/// On failure all of `out[0 .. capacity)` is zeroed.
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.
@@ -556,18 +558,21 @@ pub unsafe extern "C" fn glint_lobe_param_defaults(
         }
         // SAFETY: non-NULL and valid for `capacity` floats per the contract.
         let out = unsafe { std::slice::from_raw_parts_mut(out, capacity) };
-        out.fill(0.0);
-        // SAFETY: per the contract.
-        let rt = unsafe { runtime_ref(runtime) }?;
-        let t = rt.runtime.registry.get(id)?;
-        let size = params::block_size(t.params());
-        if capacity < size {
-            return Err(Error::new(
-                Status::OutOfRange,
-                format!("{} needs {size} floats; capacity is {capacity}", t.name()),
-            ));
-        }
-        params::write_defaults(t.params(), &mut out[..size]);
-        Ok(())
+        // Success writes only the block; failure zeroes all of `out`.
+        let defaults = |out: &mut [f32]| {
+            // SAFETY: per the contract.
+            let rt = unsafe { runtime_ref(runtime) }?;
+            let t = rt.runtime.registry.get(id)?;
+            let size = params::block_size(t.params());
+            if capacity < size {
+                return Err(Error::new(
+                    Status::OutOfRange,
+                    format!("{} needs {size} floats; capacity is {capacity}", t.name()),
+                ));
+            }
+            params::write_defaults(t.params(), &mut out[..size]);
+            Ok(())
+        };
+        defaults(out).inspect_err(|_| out.fill(0.0))
     })
 }
