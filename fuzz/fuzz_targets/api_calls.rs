@@ -265,10 +265,11 @@ impl State {
                 }
             }
             Op::DestroyRuntime(i) => {
-                if self.runtimes.is_empty() {
+                if self.runtimes.len() < 2 {
                     return;
                 }
-                let i = i as usize % self.runtimes.len();
+                // Runtime 0 is the shared first runtime, never destroyed.
+                let i = 1 + i as usize % (self.runtimes.len() - 1);
                 // Closures must not outlive their runtime (glint_runtime_destroy's
                 // contract): drop every arena holding one first.
                 let arenas: Vec<usize> = self
@@ -828,18 +829,39 @@ impl Drop for State {
             // SAFETY: live arenas, destroyed once, before their closures' runtimes.
             unsafe { glint_arena_destroy(a) };
         }
-        for &r in &self.runtimes {
-            // SAFETY: live runtimes, destroyed once.
+        for &r in &self.runtimes[1..] {
+            // SAFETY: live runtimes, destroyed once (not the shared first one).
             unsafe { glint_runtime_destroy(r) };
         }
     }
 }
 
+/// The runtime every input starts with, created once (creating one per input would
+/// dominate the run time); inputs never destroy it.
+fn first_runtime() -> *mut glint_runtime {
+    struct Shared(*mut glint_runtime);
+    // SAFETY: a runtime is read-only after setup and may be shared between threads.
+    unsafe impl Send for Shared {}
+    // SAFETY: as above.
+    unsafe impl Sync for Shared {}
+    static RT: std::sync::OnceLock<Shared> = std::sync::OnceLock::new();
+    RT.get_or_init(|| {
+        let mut rt = null_mut();
+        // SAFETY: a NUL-terminated config; out writable.
+        assert_eq!(
+            unsafe { glint_runtime_create(c"threads=1".as_ptr(), &mut rt) },
+            GLINT_OK
+        );
+        Shared(rt)
+    })
+    .0
+}
+
 fuzz_target!(|data: &[u8]| {
     let mut u = Unstructured::new(data);
     let mut state = State::default();
-    // Most inputs start from a usable runtime and arena.
-    state.add_runtime(Some(c"threads=1"));
+    // Every input starts from a usable runtime and arena.
+    state.runtimes.push(first_runtime());
     state.add_arena(8);
     for _ in 0..64 {
         let Ok(op) = Op::arbitrary(&mut u) else { break };

@@ -20,7 +20,7 @@ impl<'a> Arbitrary<'a> for Text {
         const NAMES: [&str; 6] = ["roughness", "tint", "ggx", "mode", "a_1", ""];
         Ok(Text(match u.int_in_range(0u8..=3)? {
             0 => None,
-            1 => Some(CString::new(NAMES[u.choose_index(NAMES.len())?]).expect("no NUL")),
+            1 | 2 => Some(CString::new(NAMES[u.choose_index(NAMES.len())?]).expect("no NUL")),
             _ => {
                 let bytes: Vec<u8> = u
                     .arbitrary::<Vec<u8>>()?
@@ -43,8 +43,8 @@ impl Text {
 struct Param {
     name: Text,
     kind: u8,
-    /// Offset in floats (stored as bytes), or any byte offset.
-    offset: Result<u8, u32>,
+    /// None: the packed layout's offset; else any byte offset.
+    offset: Option<u32>,
     default_value: [f32; 3],
     min: f32,
     max: f32,
@@ -54,18 +54,22 @@ struct Param {
     doc: Text,
 }
 
+/// Each field is either what a correct plugin declares (None) or any value, so that
+/// declarations the loader accepts are common and each check is reached alone.
 #[derive(Arbitrary, Debug)]
 struct Lobe {
-    struct_size_short: bool,
+    struct_size: Option<u32>,
     name: Text,
     summary: Text,
-    flags: u32,
+    /// Ok: GLINT_PLUGIN_FLAG_* bits (low 5 bits); Err: any bits.
+    flags: Result<u8, u32>,
     reciprocal: u8,
     params: Option<Vec<Param>>,
-    /// Block size in floats (stored as bytes), or any byte count.
-    block: Result<u16, u32>,
-    block_align: u8,
-    callbacks: u8,
+    /// None: the packed size of the table's floats; else any byte count.
+    block_size: Option<u32>,
+    block_align: Option<u32>,
+    /// Some(k): callback k % 3 (eval, sample, albedo) is NULL.
+    missing_callback: Option<u8>,
 }
 
 unsafe extern "C" fn eval(
@@ -102,15 +106,22 @@ fuzz_target!(|lobe: Lobe| {
                 .map(|c| c.iter().map(Text::ptr).collect())
         })
         .collect();
+    // Floats of the table so far: RGB parameters take 3, the others 1.
+    let mut floats = 0u32;
     let params: Option<Vec<abi::Param>> = lobe.params.as_ref().map(|ps| {
         ps.iter()
             .zip(&choice_arrays)
             .map(|(p, choices)| abi::Param {
                 name: p.name.ptr(),
                 kind: p.kind as u32 % 4,
-                offset: match p.offset {
-                    Ok(floats) => 4 * floats as u32,
-                    Err(bytes) => bytes,
+                offset: {
+                    let packed = 4 * floats;
+                    floats += if p.kind % 4 == abi::PARAM_RGB as u8 {
+                        3
+                    } else {
+                        1
+                    };
+                    p.offset.unwrap_or(packed)
                 },
                 default_value: p.default_value,
                 min: p.min,
@@ -123,22 +134,20 @@ fuzz_target!(|lobe: Lobe| {
             })
             .collect()
     });
+    let missing = lobe.missing_callback.map(|k| k % 3);
     let decl = abi::LobeV1 {
-        struct_size: size_of::<abi::LobeV1>() as u32 - 4 * lobe.struct_size_short as u32,
+        struct_size: lobe.struct_size.unwrap_or(size_of::<abi::LobeV1>() as u32),
         name: lobe.name.ptr(),
         summary: lobe.summary.ptr(),
-        flags: lobe.flags,
-        reciprocal: lobe.reciprocal as u32,
+        flags: lobe.flags.map_or_else(|bits| bits, |b| (b & 0x1f) as u32),
+        reciprocal: lobe.reciprocal as u32 % 3,
         params: params.as_ref().map_or(null(), |p| p.as_ptr()),
         param_count: params.as_ref().map_or(0, |p| p.len() as u32),
-        block_size: match lobe.block {
-            Ok(floats) => 4 * floats as u32,
-            Err(bytes) => bytes,
-        },
-        block_align: lobe.block_align as u32,
-        eval: (lobe.callbacks & 1 != 0).then_some(eval as abi::EvalFn),
-        sample: (lobe.callbacks & 2 != 0).then_some(sample as abi::SampleFn),
-        albedo: (lobe.callbacks & 4 != 0).then_some(albedo as abi::AlbedoFn),
+        block_size: lobe.block_size.unwrap_or(4 * floats),
+        block_align: lobe.block_align.unwrap_or(4),
+        eval: (missing != Some(0)).then_some(eval as abi::EvalFn),
+        sample: (missing != Some(1)).then_some(sample as abi::SampleFn),
+        albedo: (missing != Some(2)).then_some(albedo as abi::AlbedoFn),
         eval_batch: None,
     };
     // SAFETY: every pointer in `decl` is NULL or points into the vectors and strings
