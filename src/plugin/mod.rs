@@ -9,7 +9,7 @@
 //! infinite or negative values and pdfs, and unusable directions, are zeroed and
 //! counted ([`LobeType::sanitized_count`]).
 
-mod abi;
+pub mod abi;
 
 use crate::error::{Error, Status};
 use crate::lobes::{Eval, LobeType, Sample, Transport, VerifyCase, flags};
@@ -114,6 +114,15 @@ pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
         .into_iter()
         .map(|l| registry.register(Box::leak(Box::new(l))))
         .collect()
+}
+
+/// Validate one lobe declaration exactly as [`load`] does, registering nothing: the
+/// fuzz target `plugin_decl` (fuzz/) feeds it decoded declarations without a library.
+///
+/// # Safety
+/// Every pointer in `decl` is NULL or valid as glint_plugin.h requires of a plugin.
+pub unsafe fn validate_declaration(decl: &abi::LobeV1) -> Result<(), Error> {
+    PluginLobe::new(decl).map(drop)
 }
 
 /// Every `*.so` file in `dir`, in file-name order.
