@@ -53,7 +53,9 @@
 #define GLINT_PARAM_ENUM 2
 
 /*
- Most lanes one batch call takes: lanes are indexed by 32-bit integers.
+ Most lanes one batch call takes (`count`; larger counts return
+ `GLINT_ERROR_OUT_OF_RANGE` before any array is read): lanes are indexed by 32-bit
+ integers.
  */
 #define GLINT_MAX_BATCH_COUNT 4294967295
 
@@ -376,6 +378,11 @@ typedef struct glint_param_info {
 #define GLINT_ERROR_PLUGIN_PARAMS 18
 
 #define GLINT_ERROR_PLUGIN_BLOCK_SIZE 19
+
+/*
+ Memory ran short (a batch's staging buffers could not grow).
+ */
+#define GLINT_ERROR_OUT_OF_MEMORY 21
 
 #ifdef __cplusplus
 extern "C" {
