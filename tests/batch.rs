@@ -461,9 +461,9 @@ fn scalar_kernels_match_the_scalar_calls_bit_for_bit() {
         let wi = Vec3::try_unit(l.wi[0][i], l.wi[1][i], l.wi[2][i], "wi").unwrap();
         let e = c.eval(wo, wi).unwrap();
         let albedo = c.albedo(wo).unwrap().to_array();
-        for k in 0..3 {
-            same("value", i, o.value[k][i], e.value.to_array()[k]);
-            same("albedo", i, o.albedo[k][i], albedo[k]);
+        for (k, (&value, &albedo)) in e.value.to_array().iter().zip(&albedo).enumerate() {
+            same("value", i, o.value[k][i], value);
+            same("albedo", i, o.albedo[k][i], albedo);
         }
         same("pdf", i, o.pdf[i], e.pdf);
         same("pdf_only", i, o.pdf_only[i], e.pdf);

@@ -533,8 +533,9 @@ mod tests {
     #[test]
     fn shares_near_the_largest_float_normalize_without_overflow() {
         let p = normalize_shares(&[3e38, 3e38, 0.0, f32::MAX]);
-        let half = 3e38 / f32::MAX / (2.0 * 3e38 / f32::MAX + 1.0);
-        assert!((p[0] - half).abs() <= 1e-6 && p[0] == p[1], "{p:?}");
+        let share = 3e38 / f32::MAX;
+        let expected = share / (2.0 * share + 1.0);
+        assert!((p[0] - expected).abs() <= 1e-6 && p[0] == p[1], "{p:?}");
         assert_eq!(p[2], 0.0);
         assert!((p[..4].iter().sum::<f32>() - 1.0).abs() <= 1e-6, "{p:?}");
     }

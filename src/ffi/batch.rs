@@ -333,9 +333,13 @@ macro_rules! with_input {
 
 /// `glint_eval` over SoA arrays. Every batch call runs on the kernel set (`isa=`) and
 /// threads (`threads=`) of the runtime its closure was built with (with per-lane
-/// closures, the first active lane's); lanes are grouped by closure shape, and results
-/// do not depend on the thread count. Invalid lanes get zeroed outputs and the call
-/// returns the first one's error (`lane i: ...`); the other lanes are computed.
+/// closures, the first active lane's); lanes are grouped by closure shape (the same lobe
+/// types, which may come from different runtimes), and results do not depend on the
+/// thread count. Invalid lanes get zeroed outputs and the call returns the first one's
+/// error (`lane i: ...`); the other lanes are computed. A `count` above
+/// `GLINT_MAX_BATCH_COUNT` returns `GLINT_ERROR_OUT_OF_RANGE` before any array is read;
+/// `GLINT_ERROR_OUT_OF_MEMORY` means staging buffers could not grow (then some blocks of
+/// lanes may be left unwritten).
 ///
 /// # Safety
 /// `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`.
