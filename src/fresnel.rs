@@ -17,10 +17,20 @@ pub fn schlick<L: Lane>(f0: L, f90: L, cos_theta: L) -> L {
 #[inline(always)]
 pub fn dielectric<L: Lane>(cos_theta_i: L, eta: L) -> L {
     let cos_i = cos_theta_i.clamp(-L::one(), L::one());
+    dielectric_sin2(cos_i, (L::one() - cos_i * cos_i).max(L::zero()), eta)
+}
+
+/// [`dielectric`] given also `sin^2 theta_i`. Near normal incidence `1 - cos^2` loses
+/// most of its digits in f32, and with an extreme `eta` (`sin^2 theta_t = sin^2 theta_i
+/// / eta^2`) they decide between refraction and total internal reflection: callers that
+/// can form `sin^2` without cancellation (as `|w x m|^2`) pass it here.
+#[inline(always)]
+pub fn dielectric_sin2<L: Lane>(cos_theta_i: L, sin2_i: L, eta: L) -> L {
+    let cos_i = cos_theta_i.clamp(-L::one(), L::one());
     let inside = cos_i.lt(L::zero());
     let eta = L::select(inside, L::one() / eta, eta);
     let cos_i = cos_i.abs();
-    let sin2_t = (L::one() - cos_i * cos_i) / (eta * eta);
+    let sin2_t = sin2_i / (eta * eta);
     let tir = sin2_t.ge(L::one());
     let cos_t = (L::one() - sin2_t).safe_sqrt();
     let r_parl = (eta * cos_i - cos_t).safe_div(eta * cos_i + cos_t);

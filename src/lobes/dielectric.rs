@@ -62,7 +62,8 @@ fn refract<L: Lane>(w: Vec3<L>, n: Vec3<L>, eta: L) -> (Vec3<L>, L, L::Mask) {
     let eta = L::select(inside, L::one() / eta, eta);
     let n = Vec3::select(inside, -n, n);
     let cos_i = cos_i.abs();
-    let sin2_t = (L::one() - cos_i * cos_i).max(L::zero()) / (eta * eta);
+    // |w x n|^2, not 1 - cos_i^2: accurate near normal incidence (see fresnel::dielectric_sin2).
+    let sin2_t = w.cross(n).length_squared() / (eta * eta);
     let ok = sin2_t.lt(L::one());
     let cos_t = (L::one() - sin2_t).safe_sqrt();
     // Normalized: with extreme eta the two terms nearly cancel.
@@ -99,7 +100,11 @@ impl Dielectric {
         mode: Transport,
     ) -> (L, L) {
         let (wo_m, wi_m) = (wo.dot(wm), wi.dot(wm));
-        let f = fresnel::dielectric(wo_m, p.eta);
+        // sin^2(wo, wm) without cancellation: wo x (wi etap + wo) = etap (wo x wi).
+        let sin2_om = (wo.cross(wi) * etap)
+            .length_squared()
+            .safe_div((wi * etap + wo).length_squared());
+        let f = fresnel::dielectric_sin2(wo_m, sin2_om, p.eta);
         let d = p.dist.d(wm);
         // G2 / |cos_o| and G1 / |cos_o| stay finite at grazing wo, where both vanish.
         let g = p.dist.g2_over_cos_o(wo, wi);
@@ -254,7 +259,7 @@ impl Model for Dielectric {
         let up = Vec3::splat(0.0, 0.0, 1.0);
         let wm = Vec3::select(p.smooth, up, p.dist.sample_visible(wo, u0, u1));
         let wo_m = wo.dot(wm);
-        let f = fresnel::dielectric(wo_m, p.eta);
+        let f = fresnel::dielectric_sin2(wo_m, wo.cross(wm).length_squared(), p.eta);
         let reflect = uc.lt(f);
         let (wt, etap_t, no_tir) = refract(wo, wm, p.eta);
         let wi = Vec3::select(reflect, wo.reflect(wm), wt);

@@ -32,20 +32,35 @@ impl Frame {
     };
 
     /// Build a frame from a unit normal and an optional tangent hint. The tangent is
-    /// made orthogonal to `n` (Gram-Schmidt); when it is missing or parallel to `n`,
-    /// one is chosen with Duff et al. 2017 ("Building an Orthonormal Basis, Revisited").
+    /// made orthogonal to `n` by Gram-Schmidt in f64, so the frame is orthonormal to f32
+    /// rounding even when the tangent is nearly parallel to `n` (in f32 the projection
+    /// `t - n (n.t)` would keep rounding errors of `n.t` along `n`). When the tangent is
+    /// missing, not finite, or its part perpendicular to `n` is below
+    /// [`Self::PARALLEL_TANGENT`] of its length (nothing left of it but rounding), one is
+    /// chosen with Duff et al. 2017 ("Building an Orthonormal Basis, Revisited").
     pub fn new(n: Vec3<f32>, tangent: Option<Vec3<f32>>) -> Frame {
+        let n64 = F64::from(n);
         let t = tangent
-            .map(|t| t - n * n.dot(t))
-            .filter(|t| t.length_squared() > 1e-12)
-            .map(Vec3::normalize)
-            .unwrap_or_else(|| Self::duff_tangent(n));
+            .map(F64::from)
+            .and_then(|t| {
+                // Divided by |n|^2: an f32 normal is unit only to ~1e-8, and that
+                // much of n.t ~ 1 would stay in a small perpendicular part.
+                let perp = t.sub(n64.scale(n64.dot(t) / n64.dot(n64)));
+                let len2 = perp.dot(perp);
+                (len2 > (Self::PARALLEL_TANGENT * Self::PARALLEL_TANGENT) * t.dot(t))
+                    .then(|| perp.scale(1.0 / len2.sqrt()))
+            })
+            .unwrap_or_else(|| F64::from(Self::duff_tangent(n)));
         Frame {
-            t,
-            b: n.cross(t),
+            t: t.to32(),
+            b: n64.cross(t).to32(),
             n,
         }
     }
+
+    /// Relative size of a tangent's part perpendicular to the normal below which
+    /// [`Self::new`] treats the tangent as absent.
+    pub const PARALLEL_TANGENT: f64 = 1e-6;
 
     fn duff_tangent(n: Vec3<f32>) -> Vec3<f32> {
         let sign = 1.0f32.copysign(n.z);
@@ -62,5 +77,35 @@ impl Frame {
     #[inline]
     pub fn to_world(&self, v: Vec3<f32>) -> Vec3<f32> {
         self.t * v.x + self.b * v.y + self.n * v.z
+    }
+}
+
+/// A 3-vector in f64 for [`Frame::new`]'s Gram-Schmidt.
+#[derive(Clone, Copy)]
+struct F64([f64; 3]);
+
+impl F64 {
+    fn from(v: Vec3<f32>) -> F64 {
+        F64([f64::from(v.x), f64::from(v.y), f64::from(v.z)])
+    }
+    fn to32(self) -> Vec3<f32> {
+        Vec3::new(self.0[0] as f32, self.0[1] as f32, self.0[2] as f32)
+    }
+    fn dot(self, o: F64) -> f64 {
+        self.0[0] * o.0[0] + self.0[1] * o.0[1] + self.0[2] * o.0[2]
+    }
+    fn scale(self, s: f64) -> F64 {
+        F64(self.0.map(|c| c * s))
+    }
+    fn sub(self, o: F64) -> F64 {
+        F64([self.0[0] - o.0[0], self.0[1] - o.0[1], self.0[2] - o.0[2]])
+    }
+    fn cross(self, o: F64) -> F64 {
+        let (a, b) = (self.0, o.0);
+        F64([
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ])
     }
 }
