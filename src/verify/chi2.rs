@@ -201,7 +201,7 @@ pub fn integrate_cells(
     mode: Transport,
     grid: Grid,
     samples: usize,
-    suspicious: impl Fn(usize, &[f64; 4]) -> bool,
+    suspicious: impl Fn(usize, usize, &[f64; 4]) -> bool,
 ) -> Vec<[f64; 4]> {
     let f = |w: Vec3<f32>| {
         let e = lobe.eval(params, wo, w, mode);
@@ -216,14 +216,14 @@ pub fn integrate_cells(
 /// four-point midpoint estimates differ by more than 2e-4 relative and `floor` (a
 /// hundredth of a count of a chi-square test), down to 12 levels (1/32768 of a cell
 /// side). A peak narrower than a block can hide between the points, so cells that
-/// `suspicious` flags (where the samples disagree with the integral) are integrated
-/// again from 32 x 32 and then 256 x 256 blocks. That only makes the quadrature more
+/// `suspicious(cell, blocks, integral)` flags (where the samples disagree with the
+/// integral, say) are integrated again from 32 x 32 and then 256 x 256 blocks. That only makes the quadrature more
 /// accurate: it never changes what is integrated.
 pub fn integrate<C: Cells>(
     cells: &C,
     f: impl Fn(Vec3<f32>) -> [f64; 4],
     floor: f64,
-    suspicious: impl Fn(usize, &[f64; 4]) -> bool,
+    suspicious: impl Fn(usize, usize, &[f64; 4]) -> bool,
 ) -> Vec<[f64; 4]> {
     let tolerance = |v: f64| (2e-4 * v).max(floor);
     let g = |index: usize, a: f64, b: f64| {
@@ -247,8 +247,8 @@ pub fn integrate<C: Cells>(
     (0..cells.count())
         .map(|index| {
             let mut out = cell(index, 8);
-            for blocks in [32, 256] {
-                if !suspicious(index, &out) {
+            for (done, blocks) in [(8, 32), (32, 256)] {
+                if !suspicious(index, done, &out) {
                     break;
                 }
                 out = cell(index, blocks);
