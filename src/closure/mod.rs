@@ -416,11 +416,14 @@ impl Closure {
             return Err(no_sample());
         }
         let wi = l.frame.to_world(s.wi).normalize();
+        // Value and pdf at the returned world-space `wi`, exactly what `eval` and
+        // `eval_lobe` give there: the frame round trip and normalization move `wi` by
+        // a few ulps, which a narrow lobe at grazing amplifies past 1e-3.
         let (value, pdf) = match mixture {
             Some(p) if s.delta => (l.weight * s.value, p * s.pdf),
-            // The lobe alone, or the whole closure when it is the only lobe.
-            Some(_) if self.lobe_count > 1 => self.mixture(wo, wi),
-            _ => (l.weight * s.value, s.pdf),
+            None if s.delta => (l.weight * s.value, s.pdf),
+            Some(_) => self.mixture(wo, wi),
+            None => self.eval_one(k, wo, wi),
         };
         let weight = sample_weight(value, pdf).ok_or_else(no_sample)?;
         Ok(SampleResult {

@@ -2,7 +2,14 @@
 //! and the parameter sets it declares (`LobeType::verify_cases`), goes through
 //!
 //! 1. chi-square goodness of fit of `sample` against `pdf` ([`chi2`]);
+//! 1b. lobe-centred windows: a chi-square test in a tangent-plane window centred on each
+//!    part of the lobe (reflection, transmission) and scaled to its width, where a
+//!    narrow lobe spans many cells, and moment tests of the weights there
+//!    (`E[weight g]`, `g = 1, u, v`) against quadratures of `eval`; run for every case
+//!    and for narrow variants of every lobe with a `roughness` ([`narrow_sets`]);
 //! 2. consistency: sampled value and pdf equal `eval` (relative [`CONSISTENCY_TOLERANCE`]),
+//!    and a closure's world-space sample equals the closure's `eval` at the returned
+//!    direction (relative [`CLOSURE_CONSISTENCY_TOLERANCE`], tilted frame, grazing `wo`),
 //!    weight = value / pdf, flags within the lobe's, delta samples evaluate to 0, and the
 //!    pdf integrates to 1 minus the share of samples that fail (absorbed);
 //! 3. reciprocity `f(wo, wi) = f(wi, wo)` of the raw BSDF for lobes that declare it;
@@ -26,7 +33,7 @@ mod checks;
 pub mod chi2;
 mod report;
 
-pub use report::{CaseReport, Chi2Row, HardReport, LobeReport, Report};
+pub use report::{CaseReport, Chi2Row, HardReport, LobeReport, Moment, Report, WindowRow};
 
 use crate::lobes::LobeType;
 use crate::params::{self, ParamKind};
@@ -34,6 +41,10 @@ use crate::registry::Registry;
 
 /// Maximum relative difference between a sample's value/pdf and `eval` at its direction.
 pub const CONSISTENCY_TOLERANCE: f64 = 1e-4;
+/// Maximum relative difference between a closure's sample (value, pdf) and the
+/// closure's `eval` at the world-space direction the sample returns: they are
+/// evaluated at the same direction, so only summation order may differ.
+pub const CLOSURE_CONSISTENCY_TOLERANCE: f64 = 1e-6;
 /// Maximum relative asymmetry of reciprocal lobes.
 pub const RECIPROCITY_TOLERANCE: f64 = 1e-4;
 /// Maximum [`batch_difference`] between batch and scalar results. The scalar kernels
@@ -73,6 +84,15 @@ pub struct Budget {
     pub chi2_samples: usize,
     pub chi2_grid: chi2::Grid,
     pub chi2_cos_theta: &'static [f32],
+    /// Samples of each lobe-centred window test (chi-square and moments).
+    pub window_samples: usize,
+    /// Samples that place the windows.
+    pub window_pilot: usize,
+    /// Cells per side of a window.
+    pub window_cells: usize,
+    /// `cos theta_o` of the window tests: the chi-square angles and 45-60 degrees,
+    /// where a view-independent sampler of a narrow lobe is hardest to see.
+    pub window_cos_theta: &'static [f32],
     pub consistency_samples: usize,
     pub reciprocity_pairs: usize,
     pub energy_samples: usize,
@@ -91,6 +111,10 @@ impl Tier {
                     n_phi: 20,
                 },
                 chi2_cos_theta: &[0.9, 0.35, 0.05],
+                window_samples: 500_000,
+                window_pilot: 4_000,
+                window_cells: 10,
+                window_cos_theta: &[0.9, 0.7071, 0.6428, 0.5, 0.05],
                 consistency_samples: 2_000,
                 reciprocity_pairs: 2_000,
                 energy_samples: 10_000,
@@ -105,6 +129,10 @@ impl Tier {
                     n_phi: 40,
                 },
                 chi2_cos_theta: &[0.95, 0.6, 0.2, 0.03],
+                window_samples: 2_000_000,
+                window_pilot: 20_000,
+                window_cells: 16,
+                window_cos_theta: &[0.95, 0.7071, 0.6428, 0.6, 0.5, 0.2, 0.03],
                 consistency_samples: 100_000,
                 reciprocity_pairs: 100_000,
                 energy_samples: 200_000,
@@ -152,6 +180,48 @@ pub fn param_sets(lobe: &dyn LobeType) -> Vec<ParamSet> {
             name: case.name.into(),
             block,
         });
+    }
+    sets
+}
+
+/// Roughness of the [`narrow_sets`]: `alpha = 0.01`, a lobe about a degree wide.
+pub const NARROW_ROUGHNESS: f32 = 0.1;
+
+/// Narrow variants of a lobe whose schema has a float `roughness`: the defaults at
+/// [`NARROW_ROUGHNESS`], once per choice of each enum parameter (distribution,
+/// Fresnel model...), duplicates removed. Empty for lobes without a roughness.
+pub fn narrow_sets(lobe: &dyn LobeType) -> Vec<ParamSet> {
+    let specs = lobe.params();
+    let Some(roughness) = specs
+        .iter()
+        .position(|s| s.name == "roughness" && matches!(s.kind, ParamKind::Float))
+    else {
+        return Vec::new();
+    };
+    let mut base = vec![0.0; params::block_size(specs)];
+    params::write_defaults(specs, &mut base);
+    base[params::offset_of(specs, roughness)] = NARROW_ROUGHNESS;
+    let mut sets = vec![ParamSet {
+        name: format!("narrow (roughness {NARROW_ROUGHNESS})"),
+        block: base.clone(),
+    }];
+    for (i, spec) in specs.iter().enumerate() {
+        let ParamKind::Enum(choices) = spec.kind else {
+            continue;
+        };
+        for (c, choice) in choices.iter().enumerate() {
+            let mut block = base.clone();
+            block[params::offset_of(specs, i)] = c as f32;
+            if sets.iter().all(|s| s.block != block) {
+                sets.push(ParamSet {
+                    name: format!(
+                        "narrow (roughness {NARROW_ROUGHNESS}, {} {choice})",
+                        spec.name
+                    ),
+                    block,
+                });
+            }
+        }
     }
     sets
 }
@@ -233,10 +303,15 @@ pub fn verify_lobe(lobe: &'static dyn LobeType, tier: Tier) -> LobeReport {
     let sanitized_before = lobe.sanitized_count();
     let mut rng = Rng::new(0x6c69_6e74 ^ lobe.name().len() as u64);
     let sets = param_sets(lobe);
-    let cases = sets
+    let mut cases: Vec<CaseReport> = sets
         .iter()
         .map(|set| checks::verify_case(lobe, set, &budget, &mut rng))
         .collect();
+    cases.extend(
+        narrow_sets(lobe)
+            .iter()
+            .map(|set| checks::verify_sampling(lobe, set, &budget, &mut rng)),
+    );
     let hard = checks::hard_cases(lobe, &sets, &budget, &mut rng);
     LobeReport {
         lobe: lobe.name().to_string(),

@@ -1,8 +1,8 @@
 //! Harness results, pass/fail decisions, and the Markdown and JSON reports.
 
 use super::{
-    BATCH_SAMPLE_TOLERANCE, BATCH_TOLERANCE, CHI2_ALPHA, CONSISTENCY_TOLERANCE,
-    RECIPROCITY_TOLERANCE, Tier,
+    BATCH_SAMPLE_TOLERANCE, BATCH_TOLERANCE, CHI2_ALPHA, CLOSURE_CONSISTENCY_TOLERANCE,
+    CONSISTENCY_TOLERANCE, RECIPROCITY_TOLERANCE, Tier,
 };
 use serde_json::{Value, json};
 
@@ -39,12 +39,52 @@ impl Chi2Row {
     }
 }
 
+/// A moment of the weights within a window: `E[weight g 1_W]` for `g = 1, u, v`
+/// against a quadrature of `eval`.
+#[derive(Clone, Copy, Debug)]
+pub struct Moment {
+    pub estimate: f64,
+    pub standard_error: f64,
+    pub quadrature: f64,
+    pub p_value: f64,
+}
+
+/// Names of the window moments, in [`WindowRow::moments`] order.
+pub const MOMENT_NAMES: [&str; 3] = ["1", "u", "v"];
+
+/// One lobe-centred window test (see `chi2::Window`).
+#[derive(Clone, Debug)]
+pub struct WindowRow {
+    pub cos_theta_o: f32,
+    /// `"same side"` (reflection) or `"other side"` (transmission) of the surface.
+    pub side: &'static str,
+    /// Half-width of the window in the tangent plane (`tan` of the angle).
+    pub half_width: f64,
+    /// Samples that fell into the window.
+    pub inside: u64,
+    pub chi2: Chi2Row,
+    pub moments: [Moment; 3],
+}
+
+impl WindowRow {
+    /// Every p-value of the row: the chi-square test and the three moments.
+    pub fn p_values(&self) -> impl Iterator<Item = f64> + '_ {
+        std::iter::once(self.chi2.p_value)
+            .chain(self.moments.iter().map(|m| m.p_value))
+            .filter(|p| !p.is_nan())
+    }
+}
+
 /// Results of one parameter set of one lobe.
 #[derive(Clone, Debug)]
 pub struct CaseReport {
     pub case: String,
     pub chi2: Vec<Chi2Row>,
+    pub windows: Vec<WindowRow>,
     pub consistency_max_err: f64,
+    /// Worst relative mismatch of a closure's sample (world space, a tilted frame)
+    /// against the closure's `eval` at the returned direction.
+    pub closure_consistency_max_err: f64,
     pub pdf_integral_max_err: f64,
     pub flag_errors: u64,
     pub reciprocity_max_err: Option<f64>,
@@ -66,7 +106,9 @@ impl CaseReport {
         CaseReport {
             case,
             chi2: Vec::new(),
+            windows: Vec::new(),
             consistency_max_err: 0.0,
+            closure_consistency_max_err: 0.0,
             pdf_integral_max_err: 0.0,
             flag_errors: 0,
             reciprocity_max_err: None,
@@ -91,6 +133,24 @@ impl CaseReport {
             .fold(f64::NAN, f64::min)
     }
 
+    /// Smallest p-value of the window tests (NaN when none applied).
+    pub fn window_p_min(&self) -> f64 {
+        self.windows
+            .iter()
+            .flat_map(WindowRow::p_values)
+            .fold(f64::NAN, f64::min)
+    }
+
+    /// Number of statistical tests (chi-square and moments) of this case.
+    pub fn tests(&self) -> usize {
+        self.chi2.iter().filter(|r| r.applies()).count()
+            + self
+                .windows
+                .iter()
+                .map(|w| w.p_values().count())
+                .sum::<usize>()
+    }
+
     /// The checks this case fails, each with the measured value.
     pub fn failures(&self, alpha_per_test: f64) -> Vec<String> {
         let mut out = Vec::new();
@@ -104,10 +164,37 @@ impl CaseReport {
                 r.p_value, r.cos_theta_o, r.statistic, r.dof
             ));
         }
+        for w in &self.windows {
+            let at = format!(
+                "at cos_o = {} ({}, half-width {:.3e}, {} samples inside)",
+                w.cos_theta_o, w.side, w.half_width, w.inside
+            );
+            if w.chi2.applies() && w.chi2.p_value < alpha_per_test {
+                out.push(format!(
+                    "window chi-square: p = {:.3e} < {alpha_per_test:.3e} {at} (X^2 = {:.1}, dof {})",
+                    w.chi2.p_value, w.chi2.statistic, w.chi2.dof
+                ));
+            }
+            for (m, name) in w.moments.iter().zip(MOMENT_NAMES) {
+                if m.p_value < alpha_per_test {
+                    out.push(format!(
+                        "window moment E[weight {name}]: {:.5e} +- {:.1e} vs quadrature {:.5e} \
+                         (p = {:.3e}) {at}",
+                        m.estimate, m.standard_error, m.quadrature, m.p_value
+                    ));
+                }
+            }
+        }
         if self.consistency_max_err > CONSISTENCY_TOLERANCE {
             out.push(format!(
                 "consistency: sample vs eval error {:.3e}",
                 self.consistency_max_err
+            ));
+        }
+        if self.closure_consistency_max_err > CLOSURE_CONSISTENCY_TOLERANCE {
+            out.push(format!(
+                "consistency: closure sample vs eval at the returned wi error {:.3e}",
+                self.closure_consistency_max_err
             ));
         }
         if self.pdf_integral_max_err > PDF_INTEGRAL_TOLERANCE {
@@ -196,7 +283,7 @@ pub struct LobeReport {
 pub struct Report {
     pub tier: Tier,
     pub lobes: Vec<LobeReport>,
-    /// Number of chi-square tests in the run.
+    /// Number of statistical tests (chi-square and window moments) in the run.
     pub chi2_tests: usize,
     /// Sidak-corrected significance of each: `1 - (1 - CHI2_ALPHA)^(1 / chi2_tests)`.
     pub alpha_per_test: f64,
@@ -207,9 +294,8 @@ impl Report {
         let chi2_tests = lobes
             .iter()
             .flat_map(|l| &l.cases)
-            .flat_map(|c| &c.chi2)
-            .filter(|r| r.applies())
-            .count()
+            .map(CaseReport::tests)
+            .sum::<usize>()
             .max(1);
         Report {
             tier,
@@ -252,13 +338,14 @@ impl Report {
 
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
-            "# Glint verification report\n\nTier: {:?}. Chi-square tests: {}, each at significance \
-             {:.3e} (Sidak for an overall {CHI2_ALPHA}). Tolerances: consistency {CONSISTENCY_TOLERANCE:e}, \
-             reciprocity {RECIPROCITY_TOLERANCE:e}, batch {BATCH_TOLERANCE:e} (samples \
+            "# Glint verification report\n\nTier: {:?}. Statistical tests (chi-square on the sphere \
+             and in lobe-centred windows, window moments): {}, each at significance \
+             {:.3e} (Sidak for an overall {CHI2_ALPHA}). Tolerances: consistency {CONSISTENCY_TOLERANCE:e} \
+             (closure, world space: {CLOSURE_CONSISTENCY_TOLERANCE:e}), reciprocity {RECIPROCITY_TOLERANCE:e}, batch {BATCH_TOLERANCE:e} (samples \
              {BATCH_SAMPLE_TOLERANCE:e}; kernel sets compared: {}), pdf integral \
              {PDF_INTEGRAL_TOLERANCE:e} beyond 3 standard errors.\n\n\
-             | lobe | parameter set | chi2 min p | consistency max err | pdf integral err | reciprocity err | albedo min | albedo max | albedo(wo) rel err | batch max err | batch sample err | result |\n\
-             | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+             | lobe | parameter set | chi2 min p | window min p | consistency max err | closure consistency err | pdf integral err | reciprocity err | albedo min | albedo max | albedo(wo) rel err | batch max err | batch sample err | result |\n\
+             | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
             self.tier,
             self.chi2_tests,
             self.alpha_per_test,
@@ -273,7 +360,7 @@ impl Report {
                 let p = c.chi2_p_min();
                 let fails = c.failures(self.alpha_per_test);
                 s += &format!(
-                    "| {} | {} | {} | {:.2e} | {:.2e} | {} | {:.4} | {:.4} | {:.2e} | {:.1e} | {:.1e} | {} |\n",
+                    "| {} | {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} | {:.4} | {:.4} | {:.2e} | {:.1e} | {:.1e} | {} |\n",
                     l.lobe,
                     c.case,
                     if p.is_nan() {
@@ -281,7 +368,16 @@ impl Report {
                     } else {
                         format!("{p:.3}")
                     },
+                    {
+                        let w = c.window_p_min();
+                        if w.is_nan() {
+                            "n/a".into()
+                        } else {
+                            format!("{w:.3}")
+                        }
+                    },
                     c.consistency_max_err,
+                    c.closure_consistency_max_err,
                     c.pdf_integral_max_err,
                     c.reciprocity_max_err
                         .map_or("not reciprocal".into(), |e| format!("{e:.2e}")),
@@ -338,7 +434,24 @@ impl Report {
                         "absorbed": r.absorbed,
                         "pdf_integral": r.pdf_integral,
                     })).collect::<Vec<_>>(),
+                    "windows": c.windows.iter().map(|w| json!({
+                        "cos_theta_o": w.cos_theta_o,
+                        "side": w.side,
+                        "half_width": w.half_width,
+                        "inside": w.inside,
+                        "statistic": w.chi2.statistic,
+                        "dof": w.chi2.dof,
+                        "p_value": num(w.chi2.p_value),
+                        "moments": w.moments.iter().zip(MOMENT_NAMES).map(|(m, name)| json!({
+                            "g": name,
+                            "estimate": m.estimate,
+                            "standard_error": m.standard_error,
+                            "quadrature": m.quadrature,
+                            "p_value": num(m.p_value),
+                        })).collect::<Vec<_>>(),
+                    })).collect::<Vec<_>>(),
                     "consistency_max_err": num(c.consistency_max_err),
+                    "closure_consistency_max_err": num(c.closure_consistency_max_err),
                     "pdf_integral_max_err": num(c.pdf_integral_max_err),
                     "flag_errors": c.flag_errors,
                     "reciprocity_max_err": c.reciprocity_max_err.map(num),
