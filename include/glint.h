@@ -65,6 +65,13 @@
 #define GLINT_PARAM_ENUM 2
 
 /*
+ Most lanes one batch call takes (`count`; larger counts return
+ `GLINT_ERROR_OUT_OF_RANGE` before any array is read): lanes are indexed by 32-bit
+ integers.
+ */
+#define GLINT_MAX_BATCH_COUNT 4294967295
+
+/*
  An arena of closures owned by the caller; one thread at a time. A small shell
  (see `handle`) around its slots.
  */
@@ -397,6 +404,11 @@ typedef struct glint_param_info {
  */
 #define GLINT_ERROR_INVALID_HANDLE 20
 
+/*
+ Memory ran short (a batch's staging buffers could not grow).
+ */
+#define GLINT_ERROR_OUT_OF_MEMORY 21
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -404,9 +416,13 @@ extern "C" {
 /*
  `glint_eval` over SoA arrays. Every batch call runs on the kernel set (`isa=`) and
  threads (`threads=`) of the runtime its closure was built with (with per-lane
- closures, the first active lane's); lanes are grouped by closure shape, and results
- do not depend on the thread count. Invalid lanes get zeroed outputs and the call
- returns the first one's error (`lane i: ...`); the other lanes are computed.
+ closures, the first active lane's); lanes are grouped by closure shape (the same lobe
+ types, which may come from different runtimes), and results do not depend on the
+ thread count. Invalid lanes get zeroed outputs and the call returns the first one's
+ error (`lane i: ...`); the other lanes are computed. A `count` above
+ `GLINT_MAX_BATCH_COUNT` returns `GLINT_ERROR_OUT_OF_RANGE` before any array is read;
+ `GLINT_ERROR_OUT_OF_MEMORY` means staging buffers could not grow (then some blocks of
+ lanes may be left unwritten).
 
  # Safety
  `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`.
