@@ -734,6 +734,26 @@ static uint64_t sanitized(const fixture *fx, uint32_t id)
     return count;
 }
 
+/* Directions and outputs of up to 64 eval lanes. */
+typedef struct eval_lanes {
+    float wo_x[64], wo_y[64], wo_z[64], wi_x[64], wi_y[64], wi_z[64], r[64], g[64], b[64],
+        pdf[64];
+} eval_lanes;
+
+/* glint_eval_batch_args for the first n lanes of l on closure c. */
+static glint_eval_batch_args eval_args(const glint_closure *c, eval_lanes *l, size_t n)
+{
+    glint_eval_batch_args a;
+    memset(&a, 0, sizeof a);
+    a.struct_size = sizeof a;
+    a.count = n;
+    a.closure = c;
+    a.wo_x = l->wo_x, a.wo_y = l->wo_y, a.wo_z = l->wo_z;
+    a.wi_x = l->wi_x, a.wi_y = l->wi_y, a.wi_z = l->wi_z;
+    a.value_r = l->r, a.value_g = l->g, a.value_b = l->b, a.pdf = l->pdf;
+    return a;
+}
+
 /* glint_test_nan's eval returns NaN values and pdf -1: every output reaching the caller
  * is zeroed, and counted; a well-behaved lobe (charlie, over hard inputs) counts none. */
 static void nan_outputs_are_zeroed_and_counted(void **state)
@@ -746,7 +766,7 @@ static void nan_outputs_are_zeroed_and_counted(void **state)
     glint_eval_result e = eval_result_init();
     glint_sample_result s = sample_result_init();
     glint_eval_batch_args a;
-    float r[64], g[64], b[64], pdf[64], wo_x[64], wo_y[64], wo_z[64], wi_x[64], wi_y[64], wi_z[64];
+    eval_lanes l;
     float p = -1.0f, u0;
     glint_status st;
     lcg rng;
@@ -785,18 +805,14 @@ static void nan_outputs_are_zeroed_and_counted(void **state)
     lcg_seed(&rng, 3);
     for (i = 0; i < 64; i++) {
         glint_vec3 o = lcg_direction(&rng, 1), d = lcg_direction(&rng, 1);
-        wo_x[i] = o.x, wo_y[i] = o.y, wo_z[i] = o.z, wi_x[i] = d.x, wi_y[i] = d.y, wi_z[i] = d.z;
+        l.wo_x[i] = o.x, l.wo_y[i] = o.y, l.wo_z[i] = o.z;
+        l.wi_x[i] = d.x, l.wi_y[i] = d.y, l.wi_z[i] = d.z;
     }
-    memset(&a, 0, sizeof a);
-    a.struct_size = sizeof a;
-    a.count = 64;
-    a.closure = c;
-    a.wo_x = wo_x, a.wo_y = wo_y, a.wo_z = wo_z, a.wi_x = wi_x, a.wi_y = wi_y, a.wi_z = wi_z;
-    a.value_r = r, a.value_g = g, a.value_b = b, a.pdf = pdf;
+    a = eval_args(c, &l, 64);
     before = sanitized(fx, nan_id);
     assert_ok(glint_eval_batch(&a));
     for (i = 0; i < 64; i++)
-        assert_true(r[i] == 0.0f && g[i] == 0.0f && b[i] == 0.0f && pdf[i] == 0.0f);
+        assert_true(l.r[i] == 0.0f && l.g[i] == 0.0f && l.b[i] == 0.0f && l.pdf[i] == 0.0f);
     assert_true(sanitized(fx, nan_id) >= before + 64);
 
     /* Charlie over hard inputs: grazing, along the normal, below, equal and opposite. */
@@ -870,7 +886,7 @@ static void extreme_outputs_stay_finite(void **state)
     glint_closure *c;
     glint_sample_result s = sample_result_init();
     glint_eval_batch_args a;
-    float r[8], g[8], b[8], pdf[8], wo_x[8], wo_y[8], wo_z[8], wi_x[8], wi_y[8], wi_z[8];
+    eval_lanes l;
     uint32_t huge;
     uint64_t before;
     int i;
@@ -891,21 +907,16 @@ static void extreme_outputs_stay_finite(void **state)
     assert_outputs_finite(c, wo, wi);
 
     for (i = 0; i < 8; i++) {
-        wo_x[i] = wo.x, wo_y[i] = wo.y, wo_z[i] = wo.z, wi_x[i] = wi.x, wi_y[i] = wi.y;
-        wi_z[i] = wi.z;
+        l.wo_x[i] = wo.x, l.wo_y[i] = wo.y, l.wo_z[i] = wo.z;
+        l.wi_x[i] = wi.x, l.wi_y[i] = wi.y, l.wi_z[i] = wi.z;
     }
-    memset(&a, 0, sizeof a);
-    a.struct_size = sizeof a;
-    a.count = 8;
-    a.closure = c;
-    a.wo_x = wo_x, a.wo_y = wo_y, a.wo_z = wo_z, a.wi_x = wi_x, a.wi_y = wi_y, a.wi_z = wi_z;
-    a.value_r = r, a.value_g = g, a.value_b = b, a.pdf = pdf;
+    a = eval_args(c, &l, 8);
     assert_ok(glint_eval_batch(&a));
     for (i = 0; i < 8; i++) {
-        assert_finite_nonneg(r[i]);
-        assert_finite_nonneg(g[i]);
-        assert_finite_nonneg(b[i]);
-        assert_finite_nonneg(pdf[i]);
+        assert_finite_nonneg(l.r[i]);
+        assert_finite_nonneg(l.g[i]);
+        assert_finite_nonneg(l.b[i]);
+        assert_finite_nonneg(l.pdf[i]);
     }
 }
 

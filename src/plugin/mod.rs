@@ -13,7 +13,8 @@
 //! - values, pdfs and albedos that are NaN, infinite or negative become 0; finite ones
 //!   above [`PLUGIN_MAX_VALUE`] become [`PLUGIN_MAX_VALUE`];
 //! - a sample whose pdf is below [`PLUGIN_MIN_PDF`] (or not a number), or whose
-//!   direction is not unit, is no sample; its weight `value / pdf` is then at most
+//!   direction is not unit, is no sample (a valid pdf below the floor, as a sharp lobe's
+//!   tail gives, is not counted); its weight `value / pdf` is then at most
 //!   `PLUGIN_MAX_VALUE / PLUGIN_MIN_PDF` = 1e28 per unit of lobe weight;
 //! - every callback gets a copy of the closure's parameter block, so a plugin that
 //!   writes to its `const` block cannot change a finished closure; a call that wrote
@@ -505,8 +506,9 @@ impl LobeType for PluginLobe {
             self.count(1);
             return crate::lobes::no_sample();
         }
+        // A tiny but valid pdf is the floor's doing, not the plugin's fault: not counted.
         if s.pdf.is_nan() || s.pdf < PLUGIN_MIN_PDF {
-            self.count(1);
+            self.count(u64::from(s.pdf.is_nan() || s.pdf < 0.0));
             return crate::lobes::no_sample();
         }
         let eta = if s.eta.is_finite() && s.eta > 0.0 {
