@@ -2,7 +2,8 @@
  * every entry point, alone and mixed with built-ins, from C and from JSON, in batches;
  * a chi-square test of the Charlie plugin's sampling; every loader error with its own
  * status, a message naming the file or lobe, and nothing half registered; sanitized
- * outputs of a lobe that returns NaN; the plugins= config key. CMake passes the plugin
+ * outputs of lobes that return NaN or finite extremes, and of one that writes to its
+ * parameter block; the plugins= config key. CMake passes the plugin
  * paths and directories (GLINT_*_PATH, GLINT_PLUGIN_DIR, GLINT_PLUGIN_BUILD_DIR). */
 #include "common.h"
 
@@ -660,13 +661,16 @@ static void charlie_chi_square(void **state)
 typedef struct load_case {
     const char *path;
     glint_status status;
-    const char *lobe;           /* named in glint_last_error() besides the file, or NULL */
+    const char *mention;        /* in glint_last_error() besides the file (a lobe), or NULL */
     const char *not_registered; /* a valid lobe of the plugin that must not be registered */
 } load_case;
 
 static const load_case LOAD_CASES[] = {
     {"/nonexistent/glint_no_such_plugin.so", GLINT_ERROR_PLUGIN_NOT_FOUND, NULL, NULL},
     {GLINT_NOT_A_LIBRARY_PATH, GLINT_ERROR_PLUGIN_NOT_LIBRARY, NULL, NULL},
+    /* Files that exist but are no library: not "no such file". */
+    {GLINT_PLUGIN_DIR, GLINT_ERROR_PLUGIN_NOT_LIBRARY, "is a directory", NULL},
+    {"/dev/null", GLINT_ERROR_PLUGIN_NOT_LIBRARY, "not a loadable shared library", NULL},
     {GLINT_TEST_NO_ENTRY_PATH, GLINT_ERROR_PLUGIN_NO_ENTRY, NULL, NULL},
     {GLINT_TEST_REFUSE_PATH, GLINT_ERROR_PLUGIN_ABI_REFUSED, NULL, NULL},
     {GLINT_TEST_ABI99_PATH, GLINT_ERROR_PLUGIN_ABI_REFUSED, NULL, "glint_test_abi99"},
@@ -699,8 +703,8 @@ static void loader_errors(void **state)
             print_message("load case %u: %s\n", (unsigned)i, lc->path);
             check_error(fx, glint_runtime_load_plugin(fx->rt, lc->path), lc->status);
             assert_error_mentions(strrchr(lc->path, '/') + 1); /* the file */
-            if (lc->lobe != NULL)
-                assert_error_mentions(lc->lobe);
+            if (lc->mention != NULL)
+                assert_error_mentions(lc->mention);
             assert_int_equal(lobe_type_count(fx->rt), n); /* nothing half registered */
             if (lc->not_registered != NULL)
                 check_error(fx, glint_lobe_type_find(fx->rt, lc->not_registered, &id),
@@ -730,6 +734,26 @@ static uint64_t sanitized(const fixture *fx, uint32_t id)
     return count;
 }
 
+/* Directions and outputs of up to 64 eval lanes. */
+typedef struct eval_lanes {
+    float wo_x[64], wo_y[64], wo_z[64], wi_x[64], wi_y[64], wi_z[64], r[64], g[64], b[64],
+        pdf[64];
+} eval_lanes;
+
+/* glint_eval_batch_args for the first n lanes of l on closure c. */
+static glint_eval_batch_args eval_args(const glint_closure *c, eval_lanes *l, size_t n)
+{
+    glint_eval_batch_args a;
+    memset(&a, 0, sizeof a);
+    a.struct_size = sizeof a;
+    a.count = n;
+    a.closure = c;
+    a.wo_x = l->wo_x, a.wo_y = l->wo_y, a.wo_z = l->wo_z;
+    a.wi_x = l->wi_x, a.wi_y = l->wi_y, a.wi_z = l->wi_z;
+    a.value_r = l->r, a.value_g = l->g, a.value_b = l->b, a.pdf = l->pdf;
+    return a;
+}
+
 /* glint_test_nan's eval returns NaN values and pdf -1: every output reaching the caller
  * is zeroed, and counted; a well-behaved lobe (charlie, over hard inputs) counts none. */
 static void nan_outputs_are_zeroed_and_counted(void **state)
@@ -742,7 +766,7 @@ static void nan_outputs_are_zeroed_and_counted(void **state)
     glint_eval_result e = eval_result_init();
     glint_sample_result s = sample_result_init();
     glint_eval_batch_args a;
-    float r[64], g[64], b[64], pdf[64], wo_x[64], wo_y[64], wo_z[64], wi_x[64], wi_y[64], wi_z[64];
+    eval_lanes l;
     float p = -1.0f, u0;
     glint_status st;
     lcg rng;
@@ -781,18 +805,14 @@ static void nan_outputs_are_zeroed_and_counted(void **state)
     lcg_seed(&rng, 3);
     for (i = 0; i < 64; i++) {
         glint_vec3 o = lcg_direction(&rng, 1), d = lcg_direction(&rng, 1);
-        wo_x[i] = o.x, wo_y[i] = o.y, wo_z[i] = o.z, wi_x[i] = d.x, wi_y[i] = d.y, wi_z[i] = d.z;
+        l.wo_x[i] = o.x, l.wo_y[i] = o.y, l.wo_z[i] = o.z;
+        l.wi_x[i] = d.x, l.wi_y[i] = d.y, l.wi_z[i] = d.z;
     }
-    memset(&a, 0, sizeof a);
-    a.struct_size = sizeof a;
-    a.count = 64;
-    a.closure = c;
-    a.wo_x = wo_x, a.wo_y = wo_y, a.wo_z = wo_z, a.wi_x = wi_x, a.wi_y = wi_y, a.wi_z = wi_z;
-    a.value_r = r, a.value_g = g, a.value_b = b, a.pdf = pdf;
+    a = eval_args(c, &l, 64);
     before = sanitized(fx, nan_id);
     assert_ok(glint_eval_batch(&a));
     for (i = 0; i < 64; i++)
-        assert_true(r[i] == 0.0f && g[i] == 0.0f && b[i] == 0.0f && pdf[i] == 0.0f);
+        assert_true(l.r[i] == 0.0f && l.g[i] == 0.0f && l.b[i] == 0.0f && l.pdf[i] == 0.0f);
     assert_true(sanitized(fx, nan_id) >= before + 64);
 
     /* Charlie over hard inputs: grazing, along the normal, below, equal and opposite. */
@@ -824,6 +844,115 @@ static void nan_outputs_are_zeroed_and_counted(void **state)
     check_error(fx, glint_lobe_sanitized_count(NULL, nan_id, &out), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_lobe_sanitized_count(fx->rt, nan_id, NULL), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_lobe_sanitized_count(fx->rt, n, &out), GLINT_ERROR_OUT_OF_RANGE);
+}
+
+/* Every output of closure c finite and >= 0 at (wo, wi), and its samples' over a few u. */
+static void assert_outputs_finite(const glint_closure *c, glint_vec3 wo, glint_vec3 wi)
+{
+    glint_eval_result e = eval_result_init();
+    glint_sample_result s = sample_result_init();
+    float albedo[3] = {-1.0f, -1.0f, -1.0f}, p = -1.0f;
+    glint_status st;
+    int i, k;
+
+    assert_ok(glint_eval(c, wo, wi, &e));
+    assert_ok(glint_pdf(c, wo, wi, &p));
+    assert_ok(glint_albedo(c, wo, albedo));
+    for (k = 0; k < 3; k++) {
+        assert_finite_nonneg(e.value[k]);
+        assert_finite_nonneg(albedo[k]);
+    }
+    assert_finite_nonneg(e.pdf);
+    assert_finite_nonneg(e.pdf_reverse);
+    assert_finite_nonneg(p);
+    for (i = 0; i < 16; i++) {
+        st = glint_sample(c, wo, (float)i / 16.0f, 0.3f + 0.04f * (float)i, 0.7f, &s);
+        assert_true(st == GLINT_OK || st == GLINT_NO_SAMPLE);
+        for (k = 0; k < 3; k++) {
+            assert_finite_nonneg(s.value[k]);
+            assert_finite_nonneg(s.weight[k]);
+        }
+        assert_finite_nonneg(s.pdf);
+    }
+}
+
+/* glint_test_huge returns FLT_MAX values, pdfs and albedo, and samples of pdf 1e-30:
+ * finite, but FLT_MAX x weight 2 and FLT_MAX / 1e-30 are infinite. No closure output
+ * may be, alone or mixed with a built-in, scalar or batch; each bound output counts. */
+static void extreme_outputs_stay_finite(void **state)
+{
+    fixture *fx = *state;
+    const glint_vec3 wo = test_wo(), wi = v3_normalize(v3(-0.3f, 0.1f, 0.8f));
+    glint_closure *c;
+    glint_sample_result s = sample_result_init();
+    glint_eval_batch_args a;
+    eval_lanes l;
+    uint32_t huge;
+    uint64_t before;
+    int i;
+
+    load(fx, GLINT_TEST_HUGE_PATH);
+    huge = lobe_id(fx->rt, "glint_test_huge");
+    c = json_closure(fx, "{\"lobes\": [{\"type\": \"glint_test_huge\", \"weight\": 2}]}", NULL);
+    before = sanitized(fx, huge);
+    assert_outputs_finite(c, wo, wi);
+    /* A sample of pdf 1e-30 is no sample (its weight would be FLT_MAX / 1e-30). */
+    check_error(fx, glint_sample_lobe(c, 0, wo, 0.5f, 0.5f, 0.5f, &s), GLINT_NO_SAMPLE);
+    assert_true(sanitized(fx, huge) > before);
+
+    c = json_closure(fx,
+                     "{\"lobes\": [{\"type\": \"glint_test_huge\", \"weight\": 2},"
+                     " {\"type\": \"lambert\", \"weight\": 3}]}",
+                     NULL);
+    assert_outputs_finite(c, wo, wi);
+
+    for (i = 0; i < 8; i++) {
+        l.wo_x[i] = wo.x, l.wo_y[i] = wo.y, l.wo_z[i] = wo.z;
+        l.wi_x[i] = wi.x, l.wi_y[i] = wi.y, l.wi_z[i] = wi.z;
+    }
+    a = eval_args(c, &l, 8);
+    assert_ok(glint_eval_batch(&a));
+    for (i = 0; i < 8; i++) {
+        assert_finite_nonneg(l.r[i]);
+        assert_finite_nonneg(l.g[i]);
+        assert_finite_nonneg(l.b[i]);
+        assert_finite_nonneg(l.pdf[i]);
+    }
+}
+
+/* glint_test_writes_params halves its `reflectance` in place on every call: the
+ * finished closure must not change (each call sees reflectance 0.8), and the writes
+ * are counted. */
+static void plugins_cannot_change_their_parameters(void **state)
+{
+    fixture *fx = *state;
+    const glint_vec3 wo = test_wo(), wi = v3_normalize(v3(-0.3f, 0.1f, 0.8f));
+    const float reflectance = 0.8f;
+    glint_closure *c;
+    glint_eval_result first = eval_result_init(), e = eval_result_init();
+    glint_sample_result s0 = sample_result_init(), s = sample_result_init();
+    float albedo[3];
+    uint32_t id;
+    uint64_t before;
+    int i;
+
+    load(fx, GLINT_TEST_WRITES_PARAMS_PATH);
+    id = lobe_id(fx->rt, "glint_test_writes_params");
+    c = single_lobe_closure(fx, id, &reflectance, 1, NULL);
+    before = sanitized(fx, id);
+    assert_ok(glint_eval(c, wo, wi, &first));
+    assert_ok(glint_sample(c, wo, 0.5f, 0.3f, 0.6f, &s0));
+    for (i = 0; i < 4; i++) {
+        assert_ok(glint_eval(c, wo, wi, &e));
+        assert_true(e.value[0] == first.value[0] && e.pdf == first.pdf);
+        assert_ok(glint_sample(c, wo, 0.5f, 0.3f, 0.6f, &s));
+        assert_true(s.value[0] == s0.value[0] && s.weight[0] == s0.weight[0]);
+        assert_ok(glint_albedo(c, wo, albedo));
+        assert_true(albedo[0] == reflectance);
+    }
+    /* Lambert: value = reflectance cos_i / pi. */
+    assert_close(first.value[0], reflectance * wi.z / 3.14159265f, 1e-5f);
+    assert_true(sanitized(fx, id) >= before + 13);
 }
 
 /* ---- the plugins= config key --------------------------------------------------------------- */
@@ -884,6 +1013,8 @@ int main(void)
         T(charlie_chi_square),
         T(loader_errors),
         T(nan_outputs_are_zeroed_and_counted),
+        T(extreme_outputs_stay_finite),
+        T(plugins_cannot_change_their_parameters),
         T(plugins_config_key),
     };
 #undef T

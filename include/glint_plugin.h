@@ -25,16 +25,23 @@
  *    equal what eval returns for that wi; for delta events set GLINT_PLUGIN_EVENT_DELTA,
  *    value = the reflected/transmitted fraction and pdf = the discrete probability.
  *  - albedo writes the directional albedo: the integral of eval's value over all wi.
- *  - Never return NaN, infinities or negative values or pdfs. Glint zeroes such outputs
- *    (and counts them: glint_lobe_sanitized_count in glint.h; glint-verify fails a lobe
- *    that needed it), so one bad plugin cannot poison a
- *    render, but a lobe that needs this is broken.
+ *  - Never return NaN, infinities or negative values or pdfs, values, pdfs or albedos
+ *    above 1e16, or samples with a pdf below 1e-12. Glint repairs such outputs so that
+ *    no closure output becomes NaN or infinite: NaN, infinite and negative ones become
+ *    0, finite ones above 1e16 become 1e16, and a sample with a pdf below 1e-12 (whose
+ *    weight value / pdf could overflow; such samples have total probability below
+ *    5e-11) is no sample. Each repair is counted (glint_lobe_sanitized_count in
+ *    glint.h; glint-verify fails a lobe that needed it), so one bad plugin cannot
+ *    poison a render, but a lobe that needs this is broken.
  *  - Callbacks are called concurrently from many threads: they must be reentrant and
  *    must not keep state between calls.
  *  - `params` points to the lobe's parameter block: `block_size` bytes of floats laid
  *    out as the parameter table says (a C struct of float fields, in table order, is
  *    the natural way to declare it). An enum parameter is a float holding the index of
  *    the choice. Glint validates every value against the table before a callback sees it.
+ *    The block is const: each call gets its own copy of the closure's block, so a
+ *    callback that writes to it changes nothing beyond that call (and is counted as a
+ *    repair, see above).
  *  - `transport` is GLINT_PLUGIN_RADIANCE (paths from the camera) or
  *    GLINT_PLUGIN_IMPORTANCE (from lights); only non-symmetric scattering (refraction)
  *    differs.

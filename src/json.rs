@@ -9,7 +9,14 @@
 //!
 //! Every key other than `type`, `weight`, `normal` and `tangent` is a parameter of the
 //! lobe type's schema: numbers for `float`, a number or `[r, g, b]` for `rgb`, a choice
-//! name for `enum`. Errors name the offending key or value and list the valid choices.
+//! name for `enum`. Errors name the offending key or value and list the valid choices;
+//! names from the input are shown JSON-escaped ([`quoted`]), so control characters
+//! never reach a log raw.
+//!
+//! Stricter than JSON itself: a key given twice in one object is an error (JSON leaves
+//! it open, and taking one silently would hide a typo), and `"lobes"` must not be
+//! empty. A leading UTF-8 byte order mark is skipped. A `tangent` of `[0, 0, 0]`
+//! means "choose one", as an all-zero `glint_frame.tangent` does in the C API.
 
 use crate::closure::Closure;
 use crate::error::{Error, Status};
@@ -17,7 +24,8 @@ use crate::lobes::Transport;
 use crate::math::{Frame, Vec3};
 use crate::params::{self, ParamKind};
 use crate::registry::Registry;
-use serde_json::{Map, Value};
+use serde::de::{self, Deserialize, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde_json::{Map, Number, Value};
 
 const LOBE_KEYS: &[&str] = &["type", "weight", "normal", "tangent"];
 const TOP_KEYS: &[&str] = &["lobes", "transport"];
@@ -26,13 +34,78 @@ fn parse_error(message: String) -> Error {
     Error::new(Status::Parse, message)
 }
 
+/// `s` as a JSON string literal: quoted, with control characters escaped.
+pub fn quoted(s: &str) -> String {
+    Value::from(s).to_string()
+}
+
+/// A JSON value whose objects have distinct keys: serde_json's [`Value`] keeps the
+/// last of duplicates, so this visitor builds one and rejects them.
+struct Strict(Value);
+
+impl<'de> Deserialize<'de> for Strict {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_any(StrictVisitor).map(Strict)
+    }
+}
+
+struct StrictVisitor;
+
+impl<'de> Visitor<'de> for StrictVisitor {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
+        Ok(v.into())
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
+        Ok(v.into())
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
+        Ok(Number::from_f64(v).map_or(Value::Null, Value::Number))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
+        Ok(v.into())
+    }
+    fn visit_string<E>(self, v: String) -> Result<Value, E> {
+        Ok(v.into())
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(Strict(v)) = seq.next_element()? {
+            items.push(v);
+        }
+        Ok(Value::Array(items))
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut object = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if object.contains_key(&key) {
+                return Err(de::Error::custom(format!("duplicate key {}", quoted(&key))));
+            }
+            let Strict(value) = map.next_value()?;
+            object.insert(key, value);
+        }
+        Ok(Value::Object(object))
+    }
+}
+
 /// Build (and finish) a closure from its JSON description.
 pub fn closure_from_json(
     registry: &Registry,
     text: &str,
     wo: Option<Vec3<f32>>,
 ) -> Result<Closure, Error> {
-    let root: Value =
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let Strict(root) =
         serde_json::from_str(text).map_err(|e| parse_error(format!("malformed JSON: {e}")))?;
     let obj = root.as_object().ok_or_else(|| {
         parse_error("a closure description must be a JSON object with a \"lobes\" array".into())
@@ -41,7 +114,8 @@ pub fn closure_from_json(
         return Err(Error::new(
             Status::UnknownName,
             format!(
-                "unknown key \"{key}\" in the closure; valid keys: {}",
+                "unknown key {} in the closure; valid keys: {}",
+                quoted(key),
                 TOP_KEYS.join(", ")
             ),
         ));
@@ -63,6 +137,11 @@ pub fn closure_from_json(
         .get("lobes")
         .and_then(Value::as_array)
         .ok_or_else(|| parse_error("the closure needs a \"lobes\" array".into()))?;
+    if lobes.is_empty() {
+        return Err(parse_error(
+            "\"lobes\" is empty: a closure needs at least one lobe".into(),
+        ));
+    }
     let mut closure = Closure::new(wo, mode);
     for (i, lobe) in lobes.iter().enumerate() {
         let lobe = lobe
@@ -89,7 +168,7 @@ fn add_lobe(
     let type_id = registry.find(name)?;
     let lobe_type = registry.get(type_id)?;
     let specs = lobe_type.params();
-    let at = |key: &str| format!("lobes[{i}] ({name}).{key}");
+    let at = |key: &str| format!("lobes[{i}] ({name}).{}", quoted(key));
 
     let weight = match lobe.get("weight") {
         None => [1.0; 3],
@@ -99,10 +178,14 @@ fn add_lobe(
         None => Vec3::splat(0.0, 0.0, 1.0),
         Some(v) => vector(v, &at("normal"))?,
     };
-    let tangent = lobe
-        .get("tangent")
-        .map(|v| vector(v, &at("tangent")))
-        .transpose()?;
+    // All zeros: automatic, as in the C API (`glint_frame`).
+    let tangent = match lobe.get("tangent") {
+        None => None,
+        Some(v) => match triple(v, &at("tangent"))? {
+            t if t == [0.0; 3] => None,
+            [x, y, z] => Some(Vec3::try_unit(x, y, z, &at("tangent"))?),
+        },
+    };
 
     let mut block = vec![0.0f32; params::block_size(specs)];
     params::write_defaults(specs, &mut block);

@@ -102,8 +102,9 @@ impl ParamSpec {
             Error::new(
                 Status::UnknownName,
                 format!(
-                    "{lobe}.{}: unknown choice \"{value}\"; valid choices: {}",
+                    "{lobe}.{}: unknown choice {}; valid choices: {}",
                     self.name,
+                    crate::json::quoted(value),
                     choices.join(", ")
                 ),
             )

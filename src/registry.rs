@@ -1,6 +1,10 @@
 //! Lobe types by id and by name. Built-in lobes are registered at runtime
-//! creation; plugin lobes will join the same table, so everything downstream
+//! creation; plugin lobes join the same table, so everything downstream
 //! (closures, JSON, the C API, the verification harness) sees one list.
+//!
+//! Built-in lobe types are statics; a plugin's are allocated when it is loaded and
+//! shared ([`LobeRef::Shared`]) by the registry and every closure built with them, so
+//! they are freed with the last of those, never leaked.
 
 use crate::error::{Error, Status};
 use crate::lobes::conductor::Conductor;
@@ -8,6 +12,8 @@ use crate::lobes::dielectric::Dielectric;
 use crate::lobes::lambert::Lambert;
 use crate::lobes::mirror::Mirror;
 use crate::lobes::{Builtin, LobeType};
+use std::ops::Deref;
+use std::sync::Arc;
 
 /// Every built-in lobe type, in registration (id) order.
 pub static BUILTINS: [&(dyn LobeType + 'static); 4] = [
@@ -17,21 +23,49 @@ pub static BUILTINS: [&(dyn LobeType + 'static); 4] = [
     &Builtin::<Mirror>::new(),
 ];
 
+/// A lobe type as registries and closures hold it.
+#[derive(Clone)]
+pub enum LobeRef {
+    /// A type that lives for the whole program (the built-ins): no reference count.
+    Static(&'static dyn LobeType),
+    /// A type allocated at run time (a plugin's), alive while a holder is.
+    Shared(Arc<dyn LobeType>),
+}
+
+impl Deref for LobeRef {
+    type Target = dyn LobeType;
+
+    #[inline]
+    fn deref(&self) -> &Self::Target {
+        match self {
+            LobeRef::Static(lobe) => *lobe,
+            LobeRef::Shared(lobe) => &**lobe,
+        }
+    }
+}
+
+impl From<&'static dyn LobeType> for LobeRef {
+    fn from(lobe: &'static dyn LobeType) -> Self {
+        LobeRef::Static(lobe)
+    }
+}
+
 /// The lobe types a runtime knows; ids are indices.
 pub struct Registry {
-    types: Vec<&'static dyn LobeType>,
+    types: Vec<LobeRef>,
 }
 
 impl Registry {
     /// A registry holding the built-in lobes.
     pub fn with_builtins() -> Registry {
         Registry {
-            types: BUILTINS.to_vec(),
+            types: BUILTINS.iter().map(|&lobe| LobeRef::Static(lobe)).collect(),
         }
     }
 
     /// Add a lobe type; its name must be new.
-    pub fn register(&mut self, lobe: &'static dyn LobeType) -> Result<u32, Error> {
+    pub fn register(&mut self, lobe: impl Into<LobeRef>) -> Result<u32, Error> {
+        let lobe = lobe.into();
         if self.find(lobe.name()).is_ok() {
             return Err(Error::new(
                 Status::DuplicateName,
@@ -54,8 +88,8 @@ impl Registry {
     }
 
     /// The lobe type with id `id`.
-    pub fn get(&self, id: u32) -> Result<&'static dyn LobeType, Error> {
-        self.types.get(id as usize).copied().ok_or_else(|| {
+    pub fn get(&self, id: u32) -> Result<&LobeRef, Error> {
+        self.types.get(id as usize).ok_or_else(|| {
             Error::new(
                 Status::OutOfRange,
                 format!(
@@ -76,7 +110,8 @@ impl Registry {
                 Error::new(
                     Status::UnknownName,
                     format!(
-                        "unknown lobe type \"{name}\"; valid types: {}",
+                        "unknown lobe type {}; valid types: {}",
+                        crate::json::quoted(name),
                         self.names().join(", ")
                     ),
                 )
@@ -88,7 +123,7 @@ impl Registry {
         self.types.iter().map(|t| t.name()).collect()
     }
 
-    pub fn iter(&self) -> impl Iterator<Item = &'static dyn LobeType> + '_ {
-        self.types.iter().copied()
+    pub fn iter(&self) -> impl Iterator<Item = &LobeRef> {
+        self.types.iter()
     }
 }

@@ -156,9 +156,103 @@ fn normal_is_normalized_and_defaults_fill_the_rest() {
         c.lobe_params(1),
         Block::defaults(lobe("dielectric")).as_slice()
     );
-    // An empty lobe list is a valid (black) closure.
-    let c = parse(r#"{"lobes": []}"#).unwrap();
-    assert!(c.lobes().is_empty() && c.is_finished());
+}
+
+#[test]
+fn an_empty_lobe_list_is_an_error() {
+    expect_error(
+        r#"{"lobes": []}"#,
+        Status::Parse,
+        &["\"lobes\"", "at least one lobe"],
+    );
+}
+
+#[test]
+fn duplicate_keys_are_errors_naming_the_key() {
+    for (text, key) in [
+        (
+            r#"{"lobes": [{"type": "lambert", "type": "mirror"}]}"#,
+            "type",
+        ),
+        (
+            r#"{"lobes": [{"type": "mirror"}], "lobes": [{"type": "lambert"}]}"#,
+            "lobes",
+        ),
+        (
+            r#"{"lobes": [{"type": "lambert", "color": 0.1, "color": 0.9}]}"#,
+            "color",
+        ),
+        (
+            r#"{"transport": "radiance", "lobes": [{"type": "lambert"}], "transport": "importance"}"#,
+            "transport",
+        ),
+    ] {
+        expect_error(
+            text,
+            Status::Parse,
+            &["duplicate key", &format!("\"{key}\"")],
+        );
+    }
+}
+
+#[test]
+fn a_zero_tangent_is_automatic_as_in_the_c_api() {
+    let auto = parse(r#"{"lobes": [{"type": "conductor", "normal": [0, 0.6, 0.8]}]}"#).unwrap();
+    let zero = parse(
+        r#"{"lobes": [{"type": "conductor", "normal": [0, 0.6, 0.8], "tangent": [0, 0, 0]}]}"#,
+    )
+    .unwrap();
+    assert_eq!(zero.lobes()[0].frame, auto.lobes()[0].frame);
+    // A tangent along the normal has no usable part either: automatic, as in C.
+    let along = parse(
+        r#"{"lobes": [{"type": "conductor", "normal": [0, 0.6, 0.8], "tangent": [0, 3, 4]}]}"#,
+    )
+    .unwrap();
+    assert_eq!(along.lobes()[0].frame, auto.lobes()[0].frame);
+}
+
+#[test]
+fn a_leading_byte_order_mark_is_skipped() {
+    let c = parse("\u{feff}{\"lobes\": [{\"type\": \"lambert\"}]}").unwrap();
+    assert_eq!(c.lobes().len(), 1);
+    // Anywhere else it is a stray character.
+    expect_error(
+        "{\"lobes\": [{\"type\": \"lambert\"}]} \u{feff}",
+        Status::Parse,
+        &["malformed JSON"],
+    );
+}
+
+#[test]
+fn control_characters_are_escaped_in_messages() {
+    // JSON escapes of control characters in keys, a lobe type and a choice.
+    for (text, status) in [
+        (
+            r#"{"lobes": [{"type": "lambert", "co\u0007lor": 1}]}"#,
+            Status::UnknownName,
+        ),
+        (r#"{"lo\u001b[31mbes": []}"#, Status::UnknownName),
+        (
+            r#"{"lobes": [{"type": "lam\u0007bert"}]}"#,
+            Status::UnknownName,
+        ),
+        (
+            r#"{"lobes": [{"type": "conductor", "fresnel": "sch\u0007lick"}]}"#,
+            Status::UnknownName,
+        ),
+        (
+            r#"{"lobes": [{"type": "lambert", "co\u0007lor": 1, "co\u0007lor": 2}]}"#,
+            Status::Parse,
+        ),
+    ] {
+        // Shown JSON-escaped: \u0007, \u001b.
+        let e = expect_error(text, status, &["\\u00"]);
+        assert!(
+            !e.message.chars().any(char::is_control),
+            "{text:?}: raw control character in {:?}",
+            e.message
+        );
+    }
 }
 
 #[test]

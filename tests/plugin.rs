@@ -1,5 +1,6 @@
 //! The plugin loader's failures that need no compiled plugin: a missing file, a file
-//! that is not a shared library, a library without the entry symbol, the `plugins=`
+//! that is not a shared library (text, a directory, a device), a library without the
+//! entry symbol, the `plugins=`
 //! config key. Each leaves the registry as it was. (The example plugins and every
 //! other loader error are exercised in C: c_tests/test_plugins.c.)
 
@@ -36,6 +37,32 @@ fn not_a_shared_library() {
     std::fs::write(&path, "this is not an ELF file\n").unwrap();
     fails_cleanly(
         &path,
+        Status::PluginNotLibrary,
+        "not a loadable shared library",
+    );
+}
+
+#[test]
+fn a_directory_is_not_a_library() {
+    let dir = scratch_dir("directory");
+    fails_cleanly(&dir, Status::PluginNotLibrary, "is a directory");
+}
+
+#[test]
+fn a_device_is_not_a_library() {
+    // The loader's own message, not "no such file".
+    let e = {
+        let mut registry = Registry::with_builtins();
+        glint::plugin::load(&mut registry, Path::new("/dev/null")).unwrap_err()
+    };
+    assert_eq!(e.status, Status::PluginNotLibrary, "{}", e.message);
+    assert!(
+        e.message.contains("/dev/null") && !e.message.contains("no such file"),
+        "{}",
+        e.message
+    );
+    fails_cleanly(
+        Path::new("/dev/null"),
         Status::PluginNotLibrary,
         "not a loadable shared library",
     );

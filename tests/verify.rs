@@ -132,7 +132,11 @@ static ABOVE_ONE: Broken = Broken(Defect::AlbedoAboveOne);
 static WRONG_ALBEDO: Broken = Broken(Defect::WrongAlbedo);
 
 fn verify(lobe: &'static Broken) -> Report {
-    Report::new(Tier::Fast, vec![verify::verify_lobe(lobe, Tier::Fast)])
+    let lobe: &'static dyn LobeType = lobe;
+    Report::new(
+        Tier::Fast,
+        vec![verify::verify_lobe(&lobe.into(), Tier::Fast)],
+    )
 }
 
 #[test]

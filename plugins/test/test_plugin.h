@@ -46,14 +46,17 @@ static inline void test_albedo(const void *params, const float wo[3], uint32_t t
     albedo[0] = albedo[1] = albedo[2] = wo[2] > 0.0f ? *(const float *)params : 0.0f;
 }
 
-/* A lobe declaration with the given name, parameter table, block size and eval. */
-#define TEST_LOBE_WITH(name_, params_, block_size_, eval_)                                 \
+/* A lobe declaration with the given name, parameter table, block size and callbacks. */
+#define TEST_LOBE_FULL(name_, params_, block_size_, eval_, sample_, albedo_)               \
     {                                                                                      \
         sizeof(glint_plugin_lobe_v1), name_, "a test lobe",                                \
             GLINT_PLUGIN_FLAG_REFLECTION | GLINT_PLUGIN_FLAG_DIFFUSE, 1, params_,          \
-            sizeof params_ / sizeof params_[0], block_size_, 4, eval_, test_sample,        \
-            test_albedo, NULL                                                              \
+            sizeof params_ / sizeof params_[0], block_size_, 4, eval_, sample_, albedo_,   \
+            NULL                                                                           \
     }
+/* The same with the valid lobe's sample and albedo. */
+#define TEST_LOBE_WITH(name_, params_, block_size_, eval_)                                 \
+    TEST_LOBE_FULL(name_, params_, block_size_, eval_, test_sample, test_albedo)
 /* A valid lobe declaration named name_. */
 #define TEST_LOBE(name_) TEST_LOBE_WITH(name_, test_params, sizeof(float), test_eval)
 

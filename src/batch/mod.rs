@@ -708,7 +708,7 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         stage_input(kernels, input, s, g, len, None);
         let group = &s.groups.groups()[g];
         let k = group.lobe;
-        let lobe = closure.lobes()[k].lobe;
+        let lobe = &closure.lobes()[k].lobe;
         // The chosen lobe's random numbers: the rescaled lobe choice, then u0 and u1
         // clamped into [0, 1) as `Closure::sample` does.
         let [uc, u0, u1] = rows3(&mut s.u, len);

@@ -11,10 +11,10 @@ mod arena;
 pub use arena::Arena;
 
 use crate::error::{Error, Status};
-use crate::lobes::{LobeType, Transport};
+use crate::lobes::Transport;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params;
-use crate::registry::{BUILTINS, Registry};
+use crate::registry::{BUILTINS, LobeRef, Registry};
 
 /// Most lobes a closure holds (`GLINT_MAX_LOBES`).
 pub const MAX_LOBES: usize = 16;
@@ -29,9 +29,9 @@ pub const MAX_PARAM_VALUES: usize = 512;
 pub const MAX_LOBE_WEIGHT: f32 = 1e16;
 
 /// One lobe of a closure.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 pub struct LobeInstance {
-    pub lobe: &'static dyn LobeType,
+    pub lobe: LobeRef,
     pub type_id: u32,
     pub weight: Rgb<f32>,
     pub frame: Frame,
@@ -42,7 +42,7 @@ pub struct LobeInstance {
 }
 
 const EMPTY_LOBE: LobeInstance = LobeInstance {
-    lobe: BUILTINS[0],
+    lobe: LobeRef::Static(BUILTINS[0]),
     type_id: 0,
     weight: Rgb {
         r: 0.0,
@@ -199,7 +199,7 @@ impl Closure {
             None => params::write_defaults(specs, block),
         }
         self.lobes[self.lobe_count] = LobeInstance {
-            lobe,
+            lobe: lobe.clone(),
             type_id,
             weight: Rgb::new(weight[0], weight[1], weight[2]),
             frame,
@@ -469,7 +469,7 @@ impl Closure {
 /// Each plugin lobe is its own object, so the data pointer tells them apart; built-in
 /// types may be zero-sized (one address for all), but their ids differ in every registry.
 fn same_lobe_type(a: &LobeInstance, b: &LobeInstance) -> bool {
-    a.type_id == b.type_id && std::ptr::addr_eq(a.lobe, b.lobe)
+    a.type_id == b.type_id && std::ptr::addr_eq(&*a.lobe as *const dyn crate::lobes::LobeType, &*b.lobe)
 }
 
 /// Selection probabilities proportional to `shares` (finite, >= 0, not all 0). The

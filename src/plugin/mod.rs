@@ -2,24 +2,39 @@
 //! export `glint_plugin_entry`. [`load`] opens one with libloading, negotiates the ABI
 //! version, validates every lobe declaration and parameter table, and only then
 //! registers the lobe types, so a failure never leaves a half-registered plugin.
-//! Libraries are never unloaded (unloading code with thread-local state crashes).
+//! Libraries are never unloaded (unloading code with thread-local state crashes); the
+//! lobe records Glint allocates for them are shared by the registry and the closures
+//! that use them ([`LobeRef::Shared`]) and freed with the last of those.
 //!
 //! A [`PluginLobe`] is a [`LobeType`] like any built-in: closures, JSON, batches and
-//! the verification harness use it unchanged. Its outputs are sanitized: NaN,
-//! infinite or negative values and pdfs, and unusable directions, are zeroed and
-//! counted ([`LobeType::sanitized_count`]).
+//! the verification harness use it unchanged. Its outputs are sanitized, so that
+//! nothing a plugin returns makes a closure's output non-finite, and each repair is
+//! counted ([`LobeType::sanitized_count`]):
+//! - values, pdfs and albedos that are NaN, infinite or negative become 0; finite ones
+//!   above [`PLUGIN_MAX_VALUE`] become [`PLUGIN_MAX_VALUE`];
+//! - a sample whose pdf is below [`PLUGIN_MIN_PDF`] (or not a number), or whose
+//!   direction is not unit, is no sample (a valid pdf below the floor, as a sharp lobe's
+//!   tail gives, is not counted); its weight `value / pdf` is then at most
+//!   `PLUGIN_MAX_VALUE / PLUGIN_MIN_PDF` = 1e28 per unit of lobe weight;
+//! - every callback gets a copy of the closure's parameter block, so a plugin that
+//!   writes to its `const` block cannot change a finished closure; a call that wrote
+//!   is counted.
 
 pub mod abi;
+mod intern;
 
 use crate::error::{Error, Status};
 use crate::lobes::{Eval, LobeType, Sample, Transport, VerifyCase, flags};
 use crate::math::{Rgb, Vec3};
 use crate::params::{self, ParamKind, ParamSpec};
-use crate::registry::Registry;
+use crate::registry::{LobeRef, Registry};
 use crate::simd::Kernels;
 use crate::simd::kernels::{self, EvalJob};
+use intern::intern;
 use std::ffi::{CStr, c_char, c_void};
+use std::mem::MaybeUninit;
 use std::path::Path;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 pub use abi::HOST_ABI_VERSION;
@@ -28,14 +43,41 @@ pub use abi::HOST_ABI_VERSION;
 /// no field to declare one).
 pub const PLUGIN_ALBEDO_TOLERANCE: f32 = 0.1;
 
+/// Largest value channel, pdf or albedo channel kept from a plugin; larger finite
+/// ones are clamped to it. 1e16 is far above any physical `f |cos|` (a GGX peak at
+/// alpha = 1e-6 is 3e11), and leaves room for sixteen lobes of weights up to 2e21
+/// before a closure's sum could overflow `f32`.
+pub const PLUGIN_MAX_VALUE: f32 = 1e16;
+
+/// Smallest pdf a plugin's sample may have; below it the sample is no sample (counted).
+/// Samples of density below `p` have total probability at most `4 pi p` (5e-11 here),
+/// so dropping them loses nothing measurable, while `value / pdf` stays finite.
+pub const PLUGIN_MIN_PDF: f32 = 1e-12;
+
 /// Load the plugin at `path` and register its lobe types; returns their ids.
 pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
     let shown = path.display();
-    if !path.is_file() {
-        return Err(Error::new(
-            Status::PluginNotFound,
-            format!("plugin {shown}: no such file"),
-        ));
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(Error::new(
+                Status::PluginNotFound,
+                format!("plugin {shown}: no such file"),
+            ));
+        }
+        Err(e) => {
+            return Err(Error::new(
+                Status::PluginNotFound,
+                format!("plugin {shown}: cannot access it ({e})"),
+            ));
+        }
+        Ok(m) if m.is_dir() => {
+            return Err(Error::new(
+                Status::PluginNotLibrary,
+                format!("plugin {shown}: is a directory, not a shared library"),
+            ));
+        }
+        // Anything else (a device, a text file) is for the dynamic loader to judge.
+        Ok(_) => {}
     }
     // SAFETY: loading runs the library's initializers; plugins are trusted native code
     // by contract (glint_plugin.h), as any library a host links.
@@ -112,7 +154,7 @@ pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
     std::mem::forget(library);
     lobes
         .into_iter()
-        .map(|l| registry.register(Box::leak(Box::new(l))))
+        .map(|l| registry.register(LobeRef::Shared(Arc::new(l))))
         .collect()
 }
 
@@ -143,9 +185,12 @@ pub fn plugins_in(dir: &Path) -> Result<Vec<std::path::PathBuf>, Error> {
 
 /// A lobe type declared by a plugin.
 pub struct PluginLobe {
+    /// Strings of the library's, which is never unloaded.
     name: &'static str,
     summary: &'static str,
-    params: &'static [ParamSpec],
+    params: Box<[ParamSpec]>,
+    /// Floats in the parameter block.
+    block_len: usize,
     flags: u32,
     reciprocal: bool,
     eval: abi::EvalFn,
@@ -153,7 +198,7 @@ pub struct PluginLobe {
     albedo: abi::AlbedoFn,
     eval_batch: Option<abi::EvalBatchFn>,
     /// Each float parameter at its minimum and at its maximum, for the harness.
-    verify_cases: &'static [VerifyCase],
+    verify_cases: Box<[VerifyCase]>,
     sanitized: AtomicU64,
 }
 
@@ -216,7 +261,7 @@ impl PluginLobe {
             return Err(bad(format!("{name}: reciprocal must be 0 or 1")));
         }
         let params = param_table(d).map_err(context)?;
-        let floats = params::block_size(params);
+        let floats = params::block_size(&params);
         if d.block_size as usize != 4 * floats || d.block_align != 4 {
             return Err(Error::new(
                 Status::PluginBlockSize,
@@ -240,14 +285,15 @@ impl PluginLobe {
         Ok(PluginLobe {
             name,
             summary,
+            verify_cases: corner_cases(&params),
             params,
+            block_len: floats,
             flags: d.flags,
             reciprocal: d.reciprocal == 1,
             eval,
             sample,
             albedo,
             eval_batch: d.eval_batch,
-            verify_cases: corner_cases(params),
             sanitized: AtomicU64::new(0),
         })
     }
@@ -258,23 +304,54 @@ impl PluginLobe {
         }
     }
 
-    /// `v` if finite and >= 0, else 0 (counted).
+    /// `v` if finite and in [0, PLUGIN_MAX_VALUE]; else 0, or the maximum for a
+    /// larger finite `v` (counted).
     fn clean(&self, v: f32) -> f32 {
-        if v.is_finite() && v >= 0.0 {
+        if (0.0..=PLUGIN_MAX_VALUE).contains(&v) {
             v
         } else {
             self.count(1);
-            0.0
+            if v.is_finite() && v > 0.0 {
+                PLUGIN_MAX_VALUE
+            } else {
+                0.0
+            }
         }
     }
 
     fn clean_rgb(&self, c: [f32; 3]) -> Rgb<f32> {
         Rgb::new(self.clean(c[0]), self.clean(c[1]), self.clean(c[2]))
     }
+
+    /// Call `f` with a private copy of the parameter block `params`: a plugin may
+    /// write through its `const` pointer, and the closure's block must not change.
+    /// A copy costs a few nanoseconds for a typical block (a checksum would read the
+    /// block twice and could only report the damage); a call that wrote is counted.
+    fn with_block<R>(&self, params: &[f32], f: impl FnOnce(*const c_void) -> R) -> R {
+        debug_assert_eq!(params.len(), self.block_len);
+        let mut buffer = [MaybeUninit::<f32>::uninit(); crate::closure::MAX_PARAM_VALUES];
+        let copy = &mut buffer[..params.len()];
+        // SAFETY: `copy` and `params` have the same length and do not overlap; the
+        // copy initializes every element `block` views.
+        let block = unsafe {
+            std::ptr::copy_nonoverlapping(params.as_ptr(), copy.as_mut_ptr().cast(), params.len());
+            std::slice::from_raw_parts_mut(copy.as_mut_ptr().cast::<f32>(), params.len())
+        };
+        let result = f(block.as_mut_ptr().cast_const().cast());
+        if !same_bits(block, params) {
+            self.count(1);
+        }
+        result
+    }
+}
+
+/// Whether two blocks hold the same bits (NaN-safe).
+fn same_bits(a: &[f32], b: &[f32]) -> bool {
+    a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
 /// The parameter table as a schema, checked: the packed layout in table order.
-fn param_table(d: &abi::LobeV1) -> Result<&'static [ParamSpec], Error> {
+fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
     let bad = |m: String| Error::new(Status::PluginParams, m);
     if d.param_count > 0 && d.params.is_null() {
         return Err(bad("params is NULL".into()));
@@ -303,7 +380,7 @@ fn param_table(d: &abi::LobeV1) -> Result<&'static [ParamSpec], Error> {
                         identifier(unsafe { *p.choices.add(c) }, &format!("{name} choice {c}"))
                     })
                     .collect::<Result<_, _>>()?;
-                ParamKind::Enum(Box::leak(choices.into_boxed_slice()))
+                ParamKind::Enum(intern(choices).as_slice())
             }
             k => return Err(bad(format!("parameter {name}: unknown type {k}"))),
         };
@@ -361,23 +438,22 @@ fn param_table(d: &abi::LobeV1) -> Result<&'static [ParamSpec], Error> {
         offset += kind.size();
         specs.push(spec);
     }
-    Ok(Box::leak(specs.into_boxed_slice()))
+    Ok(specs.into_boxed_slice())
 }
 
 /// Verification cases for a plugin lobe type (which cannot declare its own in ABI V1):
 /// every float parameter with a range, alone at its minimum and at its maximum.
-fn corner_cases(params: &[ParamSpec]) -> &'static [VerifyCase] {
-    let cases: Vec<VerifyCase> = params
+fn corner_cases(params: &[ParamSpec]) -> Box<[VerifyCase]> {
+    params
         .iter()
         .filter(|p| p.kind == ParamKind::Float && p.min < p.max)
         .flat_map(|p| {
             [("min", p.min), ("max", p.max)].map(|(end, v)| VerifyCase {
-                name: Box::leak(format!("{} {end}", p.name).into_boxed_str()),
-                set: Box::leak(vec![(p.name, v)].into_boxed_slice()),
+                name: intern(format!("{} {end}", p.name)).as_str(),
+                set: intern(vec![(p.name, v)]).as_slice(),
             })
         })
-        .collect();
-    Box::leak(cases.into_boxed_slice())
+        .collect()
 }
 
 fn transport(mode: Transport) -> u32 {
@@ -395,7 +471,7 @@ impl LobeType for PluginLobe {
         self.summary
     }
     fn params(&self) -> &[ParamSpec] {
-        self.params
+        &self.params
     }
     fn flags(&self) -> u32 {
         self.flags
@@ -406,18 +482,18 @@ impl LobeType for PluginLobe {
 
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         let (mut value, mut pdf) = ([0.0f32; 3], 0.0f32);
-        // SAFETY: the callback was checked non-NULL; `params` is this type's validated
-        // block; every pointer is valid for the call (glint_plugin.h contract).
-        unsafe {
+        // SAFETY: the callback was checked non-NULL; `block` is a copy of this type's
+        // validated block; every pointer is valid for the call (glint_plugin.h contract).
+        self.with_block(params, |block| unsafe {
             (self.eval)(
-                params.as_ptr().cast(),
+                block,
                 &[wo.x, wo.y, wo.z],
                 &[wi.x, wi.y, wi.z],
                 transport(mode),
                 &mut value,
                 &mut pdf,
             )
-        };
+        });
         Eval {
             value: self.clean_rgb(value),
             pdf: self.clean(pdf),
@@ -427,15 +503,9 @@ impl LobeType for PluginLobe {
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32> {
         let mut s = abi::Sample::default();
         // SAFETY: as in `eval`.
-        let produced = unsafe {
-            (self.sample)(
-                params.as_ptr().cast(),
-                &[wo.x, wo.y, wo.z],
-                &u,
-                transport(mode),
-                &mut s,
-            )
-        };
+        let produced = self.with_block(params, |block| unsafe {
+            (self.sample)(block, &[wo.x, wo.y, wo.z], &u, transport(mode), &mut s)
+        });
         if produced == 0 {
             return crate::lobes::no_sample();
         }
@@ -443,6 +513,11 @@ impl LobeType for PluginLobe {
         let length = wi.length_squared().sqrt();
         if !(length.is_finite() && (length - 1.0).abs() < 1e-3) {
             self.count(1);
+            return crate::lobes::no_sample();
+        }
+        // A tiny but valid pdf is the floor's doing, not the plugin's fault: not counted.
+        if s.pdf.is_nan() || s.pdf < PLUGIN_MIN_PDF {
+            self.count(u64::from(s.pdf.is_nan() || s.pdf < 0.0));
             return crate::lobes::no_sample();
         }
         let eta = if s.eta.is_finite() && s.eta > 0.0 {
@@ -471,14 +546,9 @@ impl LobeType for PluginLobe {
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
         let mut albedo = [0.0f32; 3];
         // SAFETY: as in `eval`.
-        unsafe {
-            (self.albedo)(
-                params.as_ptr().cast(),
-                &[wo.x, wo.y, wo.z],
-                transport(mode),
-                &mut albedo,
-            )
-        };
+        self.with_block(params, |block| unsafe {
+            (self.albedo)(block, &[wo.x, wo.y, wo.z], transport(mode), &mut albedo)
+        });
         self.clean_rgb(albedo)
     }
 
@@ -487,7 +557,7 @@ impl LobeType for PluginLobe {
     }
 
     fn verify_cases(&self) -> &[VerifyCase] {
-        self.verify_cases
+        &self.verify_cases
     }
 
     fn sanitized_count(&self) -> u64 {
@@ -501,7 +571,8 @@ impl LobeType for PluginLobe {
             });
         };
         let n = job.len;
-        // Local directions and per-lane parameter blocks, then one callback for all lanes.
+        // Local directions and copies of the per-lane parameter blocks (the plugin may
+        // write to them), then one callback for all lanes.
         let mut local = vec![[0.0f32; 6]; n];
         let mut blocks: Vec<Vec<f32>> = Vec::with_capacity(n);
         let mut weights = Vec::with_capacity(n);
@@ -523,7 +594,11 @@ impl LobeType for PluginLobe {
             column(4),
             column(5),
         );
-        let pointers: Vec<*const c_void> = blocks.iter().map(|b| b.as_ptr().cast()).collect();
+        let originals = blocks.clone();
+        let pointers: Vec<*const c_void> = blocks
+            .iter_mut()
+            .map(|b| b.as_mut_ptr().cast_const().cast())
+            .collect();
         let (mut r, mut g, mut b, mut pdf) =
             (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let args = abi::EvalBatch {
@@ -543,8 +618,14 @@ impl LobeType for PluginLobe {
             pdf: pdf.as_mut_ptr(),
         };
         // SAFETY: every array holds `n` elements and outlives the call; the parameter
-        // blocks are this type's validated blocks.
+        // blocks are writable copies of this type's validated blocks.
         unsafe { batch(&args) };
+        let wrote = blocks
+            .iter()
+            .zip(&originals)
+            .filter(|(b, o)| !same_bits(b, o))
+            .count();
+        self.count(wrote as u64);
         for (i, (weight, probability)) in weights.into_iter().enumerate() {
             let value = weight * self.clean_rgb([r[i], g[i], b[i]]);
             if let Some(rows) = &mut job.value {

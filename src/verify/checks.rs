@@ -10,7 +10,7 @@ use crate::closure::Closure;
 use crate::lobes::{LobeType, Sample, Transport, flags};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params::{self, ParamKind};
-use crate::registry::Registry;
+use crate::registry::{LobeRef, Registry};
 use crate::simd::Kernels;
 
 /// `wo` at `cos theta`, at an azimuth that differs per call so anisotropy is exercised.
@@ -59,7 +59,7 @@ fn wo_set(lobe: &dyn LobeType, cosines: &[f32]) -> Vec<Vec3<f32>> {
 }
 
 pub(super) fn verify_case(
-    lobe: &'static dyn LobeType,
+    lobe: &LobeRef,
     set: &ParamSet,
     budget: &Budget,
     rng: &mut Rng,
@@ -67,10 +67,10 @@ pub(super) fn verify_case(
     let p = set.block.as_slice();
     let mut report = verify_sampling(lobe, set, budget, rng);
     if lobe.reciprocal() {
-        report.reciprocity_max_err = Some(reciprocity(lobe, p, budget.reciprocity_pairs, rng));
+        report.reciprocity_max_err = Some(reciprocity(&**lobe, p, budget.reciprocity_pairs, rng));
     }
-    for wo in wo_set(lobe, budget.energy_cos_theta) {
-        energy(lobe, p, wo, budget, rng, &mut report);
+    for wo in wo_set(&**lobe, budget.energy_cos_theta) {
+        energy(&**lobe, p, wo, budget, rng, &mut report);
     }
     (report.batch_max_err, report.batch_sample_err) =
         scalar_vs_batch(lobe, p, budget.batch_lanes, rng);
@@ -80,18 +80,18 @@ pub(super) fn verify_case(
 /// The sampling checks of a case: chi-square on the sphere and consistency, the
 /// lobe-centred windows, and the closure's world-space consistency.
 pub(super) fn verify_sampling(
-    lobe: &'static dyn LobeType,
+    lobe: &LobeRef,
     set: &ParamSet,
     budget: &Budget,
     rng: &mut Rng,
 ) -> CaseReport {
     let p = set.block.as_slice();
     let mut report = CaseReport::new(set.name.clone());
-    for wo in wo_set(lobe, budget.chi2_cos_theta) {
-        chi2_and_consistency(lobe, p, wo, budget, rng, &mut report);
+    for wo in wo_set(&**lobe, budget.chi2_cos_theta) {
+        chi2_and_consistency(&**lobe, p, wo, budget, rng, &mut report);
     }
-    for wo in wo_set(lobe, budget.window_cos_theta) {
-        window_tests(lobe, p, wo, budget, rng, &mut report);
+    for wo in wo_set(&**lobe, budget.window_cos_theta) {
+        window_tests(&**lobe, p, wo, budget, rng, &mut report);
     }
     report.closure_consistency_max_err = closure_consistency(lobe, p, budget, rng);
     report
@@ -356,7 +356,7 @@ const CLOSURE_CONSISTENCY_COS: [f32; 5] = [0.7, 0.3, 0.05, 0.02, 0.005];
 /// the world-space `wi` it returns, for the lobe alone in a tilted frame (so that
 /// world and local directions differ in every component).
 fn closure_consistency(
-    lobe: &'static dyn LobeType,
+    lobe: &LobeRef,
     p: &[f32],
     budget: &Budget,
     rng: &mut Rng,
@@ -367,7 +367,7 @@ fn closure_consistency(
     );
     let closure = single_lobe_closure(lobe, p, frame);
     let mut cosines = CLOSURE_CONSISTENCY_COS.to_vec();
-    if transmits(lobe) {
+    if transmits(&**lobe) {
         cosines.extend(CLOSURE_CONSISTENCY_COS.map(|c| -c));
     }
     let per_direction = budget.consistency_samples / cosines.len();
@@ -527,11 +527,11 @@ fn energy(
 
 /// A finished closure holding only `lobe` with parameters `p` in `frame` (registered
 /// on the fly when it is not a built-in, as plugin lobes will be).
-fn single_lobe_closure(lobe: &'static dyn LobeType, p: &[f32], frame: Frame) -> Closure {
+fn single_lobe_closure(lobe: &LobeRef, p: &[f32], frame: Frame) -> Closure {
     let mut registry = Registry::with_builtins();
     let type_id = registry
         .find(lobe.name())
-        .or_else(|_| registry.register(lobe))
+        .or_else(|_| registry.register(lobe.clone()))
         .expect("a lobe type with a new name registers");
     let mut closure = Closure::new(None, Transport::Radiance);
     closure
@@ -545,12 +545,7 @@ fn single_lobe_closure(lobe: &'static dyn LobeType, p: &[f32], frame: Frame) -> 
 /// only this lobe, with every kernel set this CPU has; every seventh lane inactive.
 /// Returns the worst [`batch_difference`] of evaluations (eval, pdf, albedo) and of
 /// samples.
-fn scalar_vs_batch(
-    lobe: &'static dyn LobeType,
-    p: &[f32],
-    lanes: usize,
-    rng: &mut Rng,
-) -> (f64, f64) {
+fn scalar_vs_batch(lobe: &LobeRef, p: &[f32], lanes: usize, rng: &mut Rng) -> (f64, f64) {
     let closure = single_lobe_closure(lobe, p, Frame::IDENTITY);
     let dirs = |rng: &mut Rng| -> [Vec<f32>; 3] {
         let v: Vec<Vec3<f32>> = (0..lanes).map(|_| uniform_sphere(rng)).collect();
@@ -732,14 +727,14 @@ fn random_block(lobe: &dyn LobeType, rng: &mut Rng) -> Vec<f32> {
 /// Everything a lobe returns at the hard cases: never NaN, Inf or negative, never a
 /// weight with a zero pdf.
 pub(super) fn hard_cases(
-    lobe: &'static dyn LobeType,
+    lobe: &LobeRef,
     sets: &[ParamSet],
     budget: &Budget,
     rng: &mut Rng,
 ) -> HardReport {
     let mut blocks: Vec<Vec<f32>> = sets.iter().map(|s| s.block.clone()).collect();
-    blocks.extend(corner_sets(lobe));
-    blocks.extend((0..budget.random_param_sets).map(|_| random_block(lobe, rng)));
+    blocks.extend(corner_sets(&**lobe));
+    blocks.extend((0..budget.random_param_sets).map(|_| random_block(&**lobe, rng)));
     let dirs = hard_directions();
     let one_minus = 1.0 - f32::EPSILON / 2.0;
     let fixed_u = [
@@ -816,7 +811,7 @@ pub(super) fn hard_cases(
 /// Unnormalized and near-zero-length directions through the checks the C boundary
 /// applies (`Vec3::try_unit`) and then a closure: either a clean error or finite results.
 fn boundary_inputs(
-    lobe: &'static dyn LobeType,
+    lobe: &LobeRef,
     p: &[f32],
     report: &mut HardReport,
     fail: &mut impl FnMut(&mut HardReport, String),

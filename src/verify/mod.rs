@@ -37,7 +37,7 @@ pub use report::{CaseReport, Chi2Row, HardReport, LobeReport, Moment, Report, Wi
 
 use crate::lobes::LobeType;
 use crate::params::{self, ParamKind};
-use crate::registry::Registry;
+use crate::registry::{LobeRef, Registry};
 
 /// Maximum relative difference between a sample's value/pdf and `eval` at its direction.
 pub const CONSISTENCY_TOLERANCE: f64 = 1e-4;
@@ -298,17 +298,17 @@ impl Rng {
 
 /// Verify one lobe type at the given tier (chi-square significance left for the
 /// caller's [`Report`] to decide, since it depends on the number of tests in the run).
-pub fn verify_lobe(lobe: &'static dyn LobeType, tier: Tier) -> LobeReport {
+pub fn verify_lobe(lobe: &LobeRef, tier: Tier) -> LobeReport {
     let budget = tier.budget();
     let sanitized_before = lobe.sanitized_count();
     let mut rng = Rng::new(0x6c69_6e74 ^ lobe.name().len() as u64);
-    let sets = param_sets(lobe);
+    let sets = param_sets(&**lobe);
     let mut cases: Vec<CaseReport> = sets
         .iter()
         .map(|set| checks::verify_case(lobe, set, &budget, &mut rng))
         .collect();
     cases.extend(
-        narrow_sets(lobe)
+        narrow_sets(&**lobe)
             .iter()
             .map(|set| checks::verify_sampling(lobe, set, &budget, &mut rng)),
     );

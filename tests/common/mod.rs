@@ -5,13 +5,13 @@
 
 use glint::lobes::LobeType;
 use glint::params::{ParamKind, ParamSpec, block_size, offset_of, write_defaults};
-use glint::registry::Registry;
+use glint::registry::{BUILTINS, Registry};
 
 /// The built-in lobe type named `name`.
 pub fn lobe(name: &str) -> &'static dyn LobeType {
     let registry = Registry::with_builtins();
     let id = registry.find(name).expect("built-in lobe");
-    registry.get(id).expect("registered id")
+    BUILTINS[id as usize]
 }
 
 /// A lobe's parameter block, starting from the schema's defaults and edited by name.
