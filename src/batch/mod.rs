@@ -741,50 +741,41 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             events: grow(&mut s.events, len),
         };
         lobe.sample_lanes(kernels, &mut job);
-        let mixture = closure.lobes().len() > 1;
-        if mixture {
-            for (m, l) in closure.lobes().iter().enumerate() {
-                let lanes = s.lobe.lanes(input, group, m, len);
-                let [vr, vg, vb] = &mut s.value;
-                let mut job = EvalJob {
-                    len,
-                    mode: closure.transport(),
-                    wo: view3(&s.wo, len),
-                    wi: view3(&s.wi, len),
-                    lobe: lanes,
-                    value: Some([&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
-                    pdf: &mut s.pdf[..len],
-                };
-                l.lobe.eval_lanes(kernels, &mut job);
-            }
+        // Value and pdf at the returned world-space `wi`, as `Closure::sample` computes
+        // them (the lobe's local result is off by the frame round trip's rounding).
+        for (m, l) in closure.lobes().iter().enumerate() {
+            let lanes = s.lobe.lanes(input, group, m, len);
+            let [vr, vg, vb] = &mut s.value;
+            let mut job = EvalJob {
+                len,
+                mode: closure.transport(),
+                wo: view3(&s.wo, len),
+                wi: view3(&s.wi, len),
+                lobe: lanes,
+                value: Some([&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
+                pdf: &mut s.pdf[..len],
+            };
+            l.lobe.eval_lanes(kernels, &mut job);
         }
         // Final value, pdf, weight and flags, staged in place (the random-number rows
         // hold the weight), then written back row by row.
         let lobe_flags = lobe.flags();
         let n = group.lanes.len();
-        if !mixture {
-            for (v, sv) in s.value.iter_mut().zip(&s.sample_value) {
-                v[..n].copy_from_slice(&sv[..n]);
-            }
-            s.pdf[..n].copy_from_slice(&s.sample_pdf[..n]);
-        }
         let events = &s.events[..n];
         let [vr, vg, vb] = &mut s.value;
         let (vr, vg, vb) = (&mut vr[..n], &mut vg[..n], &mut vb[..n]);
         let pdf = &mut s.pdf[..n];
-        if mixture {
-            // Delta samples are not in the mixture eval: the chosen lobe's own value,
-            // and its discrete probability times the lobe's selection probability.
-            for j in (0..n).filter(|&j| events[j] & EVENT_DELTA != 0) {
-                let lane = group.lanes[j] as usize;
-                let c = input.closures.closure(lane).expect("resolved before");
-                (vr[j], vg[j], vb[j]) = (
-                    s.sample_value[0][j],
-                    s.sample_value[1][j],
-                    s.sample_value[2][j],
-                );
-                pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
-            }
+        // Delta samples are not in the mixture eval: the chosen lobe's own value, and its
+        // discrete probability times the lobe's selection probability.
+        for j in (0..n).filter(|&j| events[j] & EVENT_DELTA != 0) {
+            let lane = group.lanes[j] as usize;
+            let c = input.closures.closure(lane).expect("resolved before");
+            (vr[j], vg[j], vb[j]) = (
+                s.sample_value[0][j],
+                s.sample_value[1][j],
+                s.sample_value[2][j],
+            );
+            pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
         }
         let [wr, wg, wb] = rows3(&mut s.u, len);
         let (wr, wg, wb) = (&mut wr[..n], &mut wg[..n], &mut wb[..n]);

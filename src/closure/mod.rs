@@ -469,7 +469,8 @@ impl Closure {
 /// Each plugin lobe is its own object, so the data pointer tells them apart; built-in
 /// types may be zero-sized (one address for all), but their ids differ in every registry.
 fn same_lobe_type(a: &LobeInstance, b: &LobeInstance) -> bool {
-    a.type_id == b.type_id && std::ptr::addr_eq(&*a.lobe as *const dyn crate::lobes::LobeType, &*b.lobe)
+    a.type_id == b.type_id
+        && std::ptr::addr_eq(&*a.lobe as *const dyn crate::lobes::LobeType, &*b.lobe)
 }
 
 /// Selection probabilities proportional to `shares` (finite, >= 0, not all 0). The

@@ -355,12 +355,7 @@ const CLOSURE_CONSISTENCY_COS: [f32; 5] = [0.7, 0.3, 0.05, 0.02, 0.005];
 /// Largest relative mismatch between a closure's sample and the closure's `eval` at
 /// the world-space `wi` it returns, for the lobe alone in a tilted frame (so that
 /// world and local directions differ in every component).
-fn closure_consistency(
-    lobe: &LobeRef,
-    p: &[f32],
-    budget: &Budget,
-    rng: &mut Rng,
-) -> f64 {
+fn closure_consistency(lobe: &LobeRef, p: &[f32], budget: &Budget, rng: &mut Rng) -> f64 {
     let frame = Frame::new(
         Vec3::new(0.3f32, -0.5, 0.8).normalize(),
         Some(Vec3::new(1.0, 0.2, 0.1)),
