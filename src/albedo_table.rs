@@ -3,10 +3,12 @@
 //!
 //! Reflection ([`ReflectionTable`]): the albedo of a lobe with Fresnel `F(c)`, `c = wo.m`,
 //! is `E[F(c) G2/G1]` over visible normals `m` and reflected directions above the surface.
-//! With `F` replaced by its piecewise-linear interpolant on the nodes `c_k = (k / 12)^2`
-//! (dense toward grazing, where conductor curves bend), this is `sum_k F(c_k) H_k` with
-//! `H_k = E[hat_k(c) G2/G1]`: one table serves every Fresnel model (Schlick, exact
-//! conductor, artistic) with only the interpolation error of `F` in `c`. Isotropic grid:
+//! Schlick's `F0 (1 - s) + F90 s`, `s = (1 - c)^5`, gives `F0 A + F90 B` exactly
+//! (`A = E[(1 - s) G2/G1]`, `B = E[s G2/G1]`). Any other curve (exact conductor, artistic)
+//! is Schlick's with `F0 = F(1)`, `F90 = 1` plus its departure `d(c)` from it, and `d`
+//! replaced by its piecewise-linear interpolant on the nodes `c_k = (k / 12)^2` (dense
+//! toward grazing, where conductor curves bend) adds `sum_k d(c_k) H_k` with
+//! `H_k = E[hat_k(c) G2/G1]`: one table serves every Fresnel model. Isotropic grid:
 //! 32 `mu = cos theta_o` nodes at `sqrt(mu)` spacing (dense toward grazing) x 48
 //! `r = sqrt(alpha)` in [0, 1.5] (the dielectric reads it at the root-mean-square alpha of
 //! anisotropic lobes, up to 2.25), 16 x 16 strata per cell.
@@ -43,8 +45,10 @@ const R_MAX: f32 = 1.5;
 const STRATA: usize = 16;
 /// Intervals of the piecewise-linear Fresnel interpolant; nodes `c_k = (k / FRESNEL_K)^2`.
 const FRESNEL_K: usize = 12;
-/// Fresnel nodes, the channels of a reflection table cell.
-pub const FRESNEL_NODES: usize = FRESNEL_K + 1;
+/// Fresnel nodes.
+const FRESNEL_NODES: usize = FRESNEL_K + 1;
+/// Channels of a reflection table cell: the `H_k`, then Schlick's `A` and `B`.
+const CHANNELS: usize = FRESNEL_NODES + 2;
 /// Rows of the anisotropic table in `r`: the isotropic rows up to `r = 1.02`.
 const NR_ANISO: usize = 33;
 /// Aspect nodes, `log10(alpha_x / alpha_y)` in [0, 1].
@@ -144,15 +148,16 @@ fn fresnel_node(k: usize) -> f32 {
     x * x
 }
 
-/// `H_k` (the [`FRESNEL_NODES`] hat-function weights of `E[F(c) G2/G1]`) for `wo`.
+/// The hat-function weights `H_k` of `E[F(c) G2/G1]`, then `A = E[(1 - s) G2/G1]` and
+/// `B = E[s G2/G1]` with Schlick's `s = (1 - c)^5`, for `wo`.
 fn reflection_cell(
     dist: &Distribution<f32>,
     wo: Vec3<f32>,
     strata_n: usize,
     warp: Warp,
-) -> [f64; FRESNEL_NODES] {
+) -> [f64; CHANNELS] {
     let g1 = dist.g1(wo);
-    let mut h = [0.0f64; FRESNEL_NODES];
+    let mut h = [0.0f64; CHANNELS];
     for (u0, u1, q) in strata(strata_n, warp) {
         let m = dist.sample_visible(wo, u0, u1);
         let wi = wo.reflect(m);
@@ -167,11 +172,14 @@ fn reflection_cell(
         let t = ((c - c0) / (c1 - c0)).clamp(0.0, 1.0);
         h[j] += w * (1.0 - t);
         h[j + 1] += w * t;
+        let schlick = (1.0 - c).powi(5);
+        h[FRESNEL_NODES] += w * (1.0 - schlick);
+        h[FRESNEL_NODES + 1] += w * schlick;
     }
     h
 }
 
-/// The hat-function weights `H_k` of one distribution, `FRESNEL_NODES` per cell.
+/// The channels of [`reflection_cell`] for one distribution, `CHANNELS` per cell.
 /// Isotropic: cells `[r][mu]`; anisotropic: `[phi][aspect][r][mu]`.
 pub struct ReflectionTable {
     h: Vec<f32>,
@@ -201,7 +209,7 @@ impl ReflectionTable {
     }
 
     fn compute(kind: NdfKind) -> ReflectionTable {
-        let mut h = Vec::with_capacity(NR * N * FRESNEL_NODES);
+        let mut h = Vec::with_capacity(NR * N * CHANNELS);
         for ri in 0..NR {
             let dist = grid_distribution(kind, R_MAX * ri as f32 / (NR - 1) as f32);
             for mi in 0..N {
@@ -215,7 +223,7 @@ impl ReflectionTable {
 
     fn compute_anisotropic(kind: NdfKind) -> ReflectionTable {
         let iso = ReflectionTable::get(kind);
-        let cell_size = N * FRESNEL_NODES;
+        let cell_size = N * CHANNELS;
         let mut h = Vec::with_capacity(NP * NS * NR_ANISO * cell_size);
         for pi in 0..NP {
             let phi = std::f32::consts::FRAC_PI_2 * pi as f32 / (NP - 1) as f32;
@@ -308,11 +316,11 @@ impl ReflectionTable {
         })
     }
 
-    /// `sum_corners weight H_k(corner)` for every Fresnel node.
+    /// `sum_corners weight channel(corner)` for every channel.
     #[inline(always)]
-    fn weights<L: Lane>(&self, corners: &[(L, L)]) -> [L; FRESNEL_NODES] {
-        let stride = L::splat(FRESNEL_NODES as f32);
-        let mut h = [L::zero(); FRESNEL_NODES];
+    fn weights<L: Lane>(&self, corners: &[(L, L)]) -> [L; CHANNELS] {
+        let stride = L::splat(CHANNELS as f32);
+        let mut h = [L::zero(); CHANNELS];
         for &(cell, weight) in corners {
             let at = cell * stride;
             for (k, hk) in h.iter_mut().enumerate() {
@@ -322,9 +330,9 @@ impl ReflectionTable {
         h
     }
 
-    /// `H_k` for `wo` above the surface and `dist`, isotropic or not.
+    /// The channels for `wo` above the surface and `dist`, isotropic or not.
     #[inline(always)]
-    fn lookup<L: Lane>(wo: Vec3<L>, dist: &Distribution<L>) -> [L; FRESNEL_NODES] {
+    fn lookup<L: Lane>(wo: Vec3<L>, dist: &Distribution<L>) -> [L; CHANNELS] {
         let iso = ReflectionTable::get(dist.kind)
             .weights(&Self::corners_isotropic(wo.z, mean_roughness(dist)));
         let anisotropic = anisotropic(dist);
@@ -337,7 +345,9 @@ impl ReflectionTable {
     }
 
     /// The single-scattering albedo `E[F(wo.m) G2/G1]` of a reflection lobe, for `wo`
-    /// above the surface.
+    /// above the surface. Schlick is exact in `A` and `B`; a conductor is Schlick's
+    /// `F0 A + B` (`F0 = F(1)`, `F(0) = 1`) plus its departure from that curve,
+    /// interpolated at the Fresnel nodes: small and smooth, so little interpolation error.
     #[inline(always)]
     pub fn albedo<L: Lane>(
         wo: Vec3<L>,
@@ -345,19 +355,32 @@ impl ReflectionTable {
         fresnel: &FresnelModel<L>,
     ) -> Rgb<L> {
         let h = Self::lookup(wo, dist);
-        let mut sum = Rgb::zero();
-        for (k, hk) in h.into_iter().enumerate() {
-            sum = sum + fresnel.eval(L::splat(fresnel_node(k))) * hk;
-        }
+        let (a, b) = (h[FRESNEL_NODES], h[FRESNEL_NODES + 1]);
+        let sum = match fresnel {
+            FresnelModel::Schlick { f0, f90 } => *f0 * a + *f90 * b,
+            FresnelModel::Conductor { .. } => {
+                let f0 = fresnel.eval(L::one());
+                let mut sum = f0 * a + Rgb::splat(b);
+                for (k, &hk) in h[..FRESNEL_NODES].iter().enumerate() {
+                    let c = L::splat(fresnel_node(k));
+                    let departure = fresnel.eval(c).zip(
+                        f0,
+                        #[inline(always)]
+                        |f, f0| f - fresnel::schlick(f0, L::one(), c),
+                    );
+                    sum = sum + departure * hk;
+                }
+                sum
+            }
+        };
         sum.map(|v| v.max(L::zero()))
     }
 
     /// The shadowing albedo `E[G2/G1]` (the albedo with `F = 1`).
     #[inline(always)]
     pub fn shadowing<L: Lane>(wo: Vec3<L>, dist: &Distribution<L>) -> L {
-        Self::lookup(wo, dist)
-            .into_iter()
-            .fold(L::zero(), |a, b| a + b)
+        let h = Self::lookup(wo, dist);
+        h[FRESNEL_NODES] + h[FRESNEL_NODES + 1]
     }
 }
 
