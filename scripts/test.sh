@@ -13,5 +13,5 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure
 # Fuzz smoke (cargo-fuzz on nightly; scripts/fuzz.sh installs what it needs): each
-# target for GLINT_FUZZ_SECONDS (default 60) from its committed seeds.
-scripts/fuzz.sh all "${GLINT_FUZZ_SECONDS:-60}"
+# target for GLINT_FUZZ_SECONDS (default 30) from its committed seeds.
+scripts/fuzz.sh all "${GLINT_FUZZ_SECONDS:-30}"
