@@ -406,7 +406,7 @@ fn bilerp<L: Lane>(table: &[f32], base: L, dx: L, dy: L, fx: L, fy: L) -> L {
 
 /// Points per axis; odd, so the critical angle (x = 1/2, see [`critical_coordinate`]) is a node.
 const DN: usize = 17;
-const DIELECTRIC_STRATA: usize = 8;
+const DIELECTRIC_STRATA: usize = 16;
 /// Largest `t = |eta' - 1| / (eta' + 1)` on the grid (`eta' = 39`).
 const T_MAX: f32 = 0.95;
 
