@@ -1,8 +1,8 @@
 //! The verification harness: every registered lobe type, over its default parameters
 //! and the parameter sets it declares (`LobeType::verify_cases`), goes through
 //!
-//! 1. chi-square goodness of fit of `sample` against `pdf` ([`chi2`]);
-//! 1b. lobe-centred windows: a chi-square test in a tangent-plane window centred on each
+//! 1. chi-square goodness of fit of `sample` against `pdf` ([`chi2`]), on the sphere and
+//!    in lobe-centred windows: a chi-square test in a tangent-plane window centred on each
 //!    part of the lobe (reflection, transmission) and scaled to its width, where a
 //!    narrow lobe spans many cells, and moment tests of the weights there
 //!    (`E[weight g]`, `g = 1, u, v`) against quadratures of `eval`; run for every case
@@ -114,7 +114,7 @@ impl Tier {
                 window_samples: 500_000,
                 window_pilot: 4_000,
                 window_cells: 10,
-                window_cos_theta: &[0.9, 0.7071, 0.6428, 0.5, 0.05],
+                window_cos_theta: &[0.9, std::f32::consts::FRAC_1_SQRT_2, 0.6428, 0.5, 0.05],
                 consistency_samples: 2_000,
                 reciprocity_pairs: 2_000,
                 energy_samples: 10_000,
@@ -132,7 +132,15 @@ impl Tier {
                 window_samples: 2_000_000,
                 window_pilot: 20_000,
                 window_cells: 16,
-                window_cos_theta: &[0.95, 0.7071, 0.6428, 0.6, 0.5, 0.2, 0.03],
+                window_cos_theta: &[
+                    0.95,
+                    std::f32::consts::FRAC_1_SQRT_2,
+                    0.6428,
+                    0.6,
+                    0.5,
+                    0.2,
+                    0.03,
+                ],
                 consistency_samples: 100_000,
                 reciprocity_pairs: 100_000,
                 energy_samples: 200_000,
