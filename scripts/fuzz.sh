@@ -25,4 +25,11 @@ for t in "${selected[@]}"; do
     echo "glint: fuzzing $t for ${seconds}s" >&2
     cargo +nightly fuzz run -O "$t" "$scratch" "fuzz/corpus/$t" -- \
         -max_total_time="$seconds" -timeout=20 -print_final_stats=1 "${dict[@]}" "$@"
+    # Known reproducers (fuzz/artifacts-known/<target>-*), each run twice in one process
+    # so that state a run leaves behind (interned plugin strings) is used by the next.
+    known=(fuzz/artifacts-known/"$t"-*)
+    if [ -e "${known[0]}" ]; then
+        echo "glint: replaying ${#known[@]} known reproducer(s) of $t" >&2
+        cargo +nightly fuzz run -O "$t" "${known[@]}" "${known[@]}"
+    fi
 done

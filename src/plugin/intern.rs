@@ -23,3 +23,9 @@ pub fn intern<T: PartialEq + Send + Sync + 'static>(value: T) -> &'static T {
     values.push(stored);
     stored
 }
+
+/// A process-lifetime copy of `s`: interned values hold only these, never a string
+/// that points into a declaration (whose memory is the plugin's, or a fuzzer's).
+pub fn intern_str(s: &str) -> &'static str {
+    intern(s.to_string()).as_str()
+}

@@ -30,7 +30,7 @@ use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::{LobeRef, Registry};
 use crate::simd::Kernels;
 use crate::simd::kernels::{self, EvalJob};
-use intern::intern;
+use intern::{intern, intern_str};
 use std::ffi::{CStr, c_char, c_void};
 use std::mem::MaybeUninit;
 use std::path::Path;
@@ -378,6 +378,7 @@ fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
                     // SAFETY: `choices` holds `choice_count` strings (non-NULL checked).
                     .map(|c| {
                         identifier(unsafe { *p.choices.add(c) }, &format!("{name} choice {c}"))
+                            .map(intern_str)
                     })
                     .collect::<Result<_, _>>()?;
                 ParamKind::Enum(intern(choices).as_slice())
@@ -450,7 +451,7 @@ fn corner_cases(params: &[ParamSpec]) -> Box<[VerifyCase]> {
         .flat_map(|p| {
             [("min", p.min), ("max", p.max)].map(|(end, v)| VerifyCase {
                 name: intern(format!("{} {end}", p.name)).as_str(),
-                set: intern(vec![(p.name, v)]).as_slice(),
+                set: intern(vec![(intern_str(p.name), v)]).as_slice(),
             })
         })
         .collect()
