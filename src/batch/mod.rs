@@ -24,6 +24,7 @@ use crate::simd::kernels::{
     AlbedoJob, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob, SampleJob,
 };
 use stage::{Randoms, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch};
+use std::fmt;
 
 /// Lanes per work item: a group's staged arrays stay in the L2 cache.
 pub const BLOCK: usize = 4096;
@@ -127,8 +128,9 @@ pub fn check_count(count: usize) -> Result<(), Error> {
     Ok(())
 }
 
-/// An array the call reads or writes must hold `count` lanes.
-fn check_len(len: usize, count: usize, what: &str) -> Result<(), Error> {
+/// An array the call reads or writes must hold `count` lanes. `what` is formatted only
+/// for the error: a valid call allocates nothing but its staging, which may fail.
+fn check_len(len: usize, count: usize, what: impl fmt::Display) -> Result<(), Error> {
     if len < count {
         return Err(Error::new(
             Status::InvalidArgument,
@@ -185,7 +187,7 @@ impl Soa3<'_> {
             (self.y.len(), "y"),
             (self.z.len(), "z"),
         ] {
-            check_len(len, count, &format!("{what}.{axis}"))?;
+            check_len(len, count, format_args!("{what}.{axis}"))?;
         }
         Ok(())
     }
