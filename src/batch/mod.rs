@@ -24,6 +24,7 @@ use crate::simd::kernels::{
     AlbedoJob, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob, SampleJob,
 };
 use stage::{Randoms, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch};
+use std::fmt;
 
 /// Lanes per work item: a group's staged arrays stay in the L2 cache.
 pub const BLOCK: usize = 4096;
@@ -127,8 +128,9 @@ pub fn check_count(count: usize) -> Result<(), Error> {
     Ok(())
 }
 
-/// An array the call reads or writes must hold `count` lanes.
-fn check_len(len: usize, count: usize, what: &str) -> Result<(), Error> {
+/// An array the call reads or writes must hold `count` lanes. `what` is formatted only
+/// for the error: a valid call allocates nothing but its staging, which may fail.
+fn check_len(len: usize, count: usize, what: impl fmt::Display) -> Result<(), Error> {
     if len < count {
         return Err(Error::new(
             Status::InvalidArgument,
@@ -185,7 +187,7 @@ impl Soa3<'_> {
             (self.y.len(), "y"),
             (self.z.len(), "z"),
         ] {
-            check_len(len, count, &format!("{what}.{axis}"))?;
+            check_len(len, count, format_args!("{what}.{axis}"))?;
         }
         Ok(())
     }
@@ -363,36 +365,9 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     for g in 0..s.groups.groups().len() {
         let (len, closure) = begin_group(input, s, g)?;
         stage_input(kernels, input, s, g, len, Some(wi));
+        let (value, reverse) = (out.value.is_some(), out.pdf_reverse.is_some());
+        eval_lobes(kernels, input, s, g, closure, value, reverse);
         let group = &s.groups.groups()[g];
-        for (k, l) in closure.lobes().iter().enumerate() {
-            let lanes = s.lobe.lanes(input, group, k, len);
-            let [vr, vg, vb] = &mut s.value;
-            let mut job = EvalJob {
-                len,
-                mode: closure.transport(),
-                wo: view3(&s.wo, len),
-                wi: view3(&s.wi, len),
-                lobe: lanes,
-                value: out
-                    .value
-                    .is_some()
-                    .then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
-                pdf: &mut s.pdf[..len],
-            };
-            l.lobe.eval_lanes(kernels, &mut job);
-            if out.pdf_reverse.is_some() {
-                let mut job = EvalJob {
-                    len,
-                    mode: closure.transport(),
-                    wo: view3(&s.wi, len),
-                    wi: view3(&s.wo, len),
-                    lobe: lanes,
-                    value: None,
-                    pdf: &mut s.pdf_reverse[..len],
-                };
-                l.lobe.eval_lanes(kernels, &mut job);
-            }
-        }
         let scatter = Scatter::new(&group.lanes, start, &s.failed, s.any_failed);
         if let Some(v) = out.value.as_mut() {
             scatter.rows(&s.value, [&mut *v.x, &mut *v.y, &mut *v.z]);
@@ -411,6 +386,58 @@ fn eval_block<'a, C: ClosureSource<'a>>(
             rev[lane] = 0.0;
         }
     })
+}
+
+/// Accumulate every lobe of group `g`'s `closure` at the staged `wo` and `wi`: the
+/// pdf into `s.pdf`, with `want_value` the value into `s.value`, with `want_reverse`
+/// the pdf of `wi` to `wo` into `s.pdf_reverse`.
+fn eval_lobes<'a, C: ClosureSource<'a>>(
+    kernels: Kernels,
+    input: &BatchInput<'a, C>,
+    s: &mut Scratch,
+    g: usize,
+    closure: &Closure,
+    want_value: bool,
+    want_reverse: bool,
+) {
+    let Scratch {
+        groups,
+        lobe,
+        wo,
+        wi,
+        value,
+        pdf,
+        pdf_reverse,
+        ..
+    } = s;
+    let group = &groups.groups()[g];
+    let len = padded(group.lanes.len());
+    for (k, l) in closure.lobes().iter().enumerate() {
+        let lanes = lobe.lanes(input, group, k, len);
+        let [vr, vg, vb] = &mut *value;
+        let mut job = EvalJob {
+            len,
+            mode: closure.transport(),
+            wo: view3(wo, len),
+            wi: view3(wi, len),
+            lobe: lanes,
+            value: want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
+            pdf: &mut pdf[..len],
+        };
+        l.lobe.eval_lanes(kernels, &mut job);
+        if want_reverse {
+            let mut job = EvalJob {
+                len,
+                mode: closure.transport(),
+                wo: view3(wi, len),
+                wi: view3(wo, len),
+                lobe: lanes,
+                value: None,
+                pdf: &mut pdf_reverse[..len],
+            };
+            l.lobe.eval_lanes(kernels, &mut job);
+        }
+    }
 }
 
 /// Group `g`'s length padded to whole registers and its representative closure, with
@@ -743,20 +770,8 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         lobe.sample_lanes(kernels, &mut job);
         // Value and pdf at the returned world-space `wi`, as `Closure::sample` computes
         // them (the lobe's local result is off by the frame round trip's rounding).
-        for (m, l) in closure.lobes().iter().enumerate() {
-            let lanes = s.lobe.lanes(input, group, m, len);
-            let [vr, vg, vb] = &mut s.value;
-            let mut job = EvalJob {
-                len,
-                mode: closure.transport(),
-                wo: view3(&s.wo, len),
-                wi: view3(&s.wi, len),
-                lobe: lanes,
-                value: Some([&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
-                pdf: &mut s.pdf[..len],
-            };
-            l.lobe.eval_lanes(kernels, &mut job);
-        }
+        eval_lobes(kernels, input, s, g, closure, true, false);
+        let group = &s.groups.groups()[g];
         // Final value, pdf, weight and flags, staged in place (the random-number rows
         // hold the weight), then written back row by row.
         let lobe_flags = lobe.flags();

@@ -8,6 +8,7 @@ use crate::batch::{
     self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut,
 };
 use crate::closure::Closure;
+use std::fmt::Display;
 
 /// Most lanes one batch call takes (`count`; larger counts return
 /// `GLINT_ERROR_OUT_OF_RANGE` before any array is read): lanes are indexed by 32-bit
@@ -152,11 +153,12 @@ batch_args!(
     glint_albedo_batch_args
 );
 
-/// `count` elements at `p`, which must not be NULL.
+/// `count` elements at `p`, which must not be NULL. `what` is formatted only for the
+/// error: a batch call allocates nothing but its staging, which may fail.
 ///
 /// # Safety
 /// `p` is NULL or valid for `count` reads.
-unsafe fn input<'a, T>(p: *const T, count: usize, what: &str) -> Result<&'a [T], Error> {
+unsafe fn input<'a, T>(p: *const T, count: usize, what: impl Display) -> Result<&'a [T], Error> {
     if p.is_null() {
         return Err(null(what));
     }
@@ -164,11 +166,11 @@ unsafe fn input<'a, T>(p: *const T, count: usize, what: &str) -> Result<&'a [T],
     Ok(unsafe { std::slice::from_raw_parts(p, count) })
 }
 
-/// `count` writable elements at `p`, which must not be NULL.
+/// `count` writable elements at `p`, which must not be NULL (`what` as for [`input`]).
 ///
 /// # Safety
 /// `p` is NULL or valid for `count` writes and not aliased by another output.
-unsafe fn output<'a, T>(p: *mut T, count: usize, what: &str) -> Result<&'a mut [T], Error> {
+unsafe fn output<'a, T>(p: *mut T, count: usize, what: impl Display) -> Result<&'a mut [T], Error> {
     if p.is_null() {
         return Err(null(what));
     }
@@ -261,9 +263,9 @@ unsafe fn soa_in<'a>(
     // SAFETY: per the contract.
     unsafe {
         Ok(Soa3 {
-            x: input(x, count, &format!("{what}_x"))?,
-            y: input(y, count, &format!("{what}_y"))?,
-            z: input(z, count, &format!("{what}_z"))?,
+            x: input(x, count, format_args!("{what}_x"))?,
+            y: input(y, count, format_args!("{what}_y"))?,
+            z: input(z, count, format_args!("{what}_z"))?,
         })
     }
 }
@@ -280,9 +282,9 @@ unsafe fn soa_out<'a>(
     // SAFETY: per the contract.
     unsafe {
         Ok(Soa3Mut {
-            x: output(x, count, &format!("{what} (x/r)"))?,
-            y: output(y, count, &format!("{what} (y/g)"))?,
-            z: output(z, count, &format!("{what} (z/b)"))?,
+            x: output(x, count, format_args!("{what} (x/r)"))?,
+            y: output(y, count, format_args!("{what} (y/g)"))?,
+            z: output(z, count, format_args!("{what} (z/b)"))?,
         })
     }
 }

@@ -18,6 +18,7 @@ pub use runtime::*;
 
 use crate::error::{Error, Status};
 use handle::*;
+use std::borrow::Cow;
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -98,13 +99,21 @@ pub struct glint_vec3 {
 }
 
 thread_local! {
-    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+    static LAST_ERROR: RefCell<Cow<'static, CStr>> = const { RefCell::new(Cow::Borrowed(c"")) };
 }
 
 fn set_last_error(message: &str) {
     // A message with an interior NUL is cut there rather than lost.
-    let bytes: Vec<u8> = message.bytes().take_while(|b| *b != 0).collect();
-    let c = CString::new(bytes).unwrap_or_default();
+    let text = message.split('\0').next().unwrap_or_default();
+    let mut bytes = Vec::new();
+    // Memory may be what ran short: then the status's static description stands in.
+    let c = match bytes.try_reserve_exact(text.len() + 1) {
+        Ok(()) => {
+            bytes.extend_from_slice(text.as_bytes());
+            Cow::Owned(CString::new(bytes).expect("cut at the first NUL"))
+        }
+        Err(_) => Cow::Borrowed(Status::OutOfMemory.description()),
+    };
     LAST_ERROR.with(|e| *e.borrow_mut() = c);
 }
 
@@ -130,7 +139,7 @@ fn guard(body: impl FnOnce() -> Result<(), Error>) -> glint_status {
     }
 }
 
-fn null(what: &str) -> Error {
+fn null(what: impl std::fmt::Display) -> Error {
     Error::new(Status::NullPointer, format!("{what} is NULL"))
 }
 
