@@ -202,12 +202,14 @@ fn run(cases: &[Case], bound: impl Fn(&Case) -> f64) -> Vec<String> {
     failures
 }
 
-/// The bound each case is held to (the measured worst, rounded up). Conductors: 2% when
-/// isotropic or up to `anisotropic = 0.7`; the extreme aspects (`alpha_x / alpha_y` = 5.3
-/// and 10) err most at roughness 1 near normal incidence, where few visible normals
-/// reflect above the surface. Dielectric: not yet tabulated over anisotropy (the
-/// root-mean-square stand-in), and its isotropic table misses the grazing rough case and
-/// the critical angle from inside.
+/// The bound each case is held to: the worst measured over the full grid
+/// (`albedo_full_grid`), rounded up. Conductors: 2% when isotropic or up to
+/// `anisotropic = 0.7` (worst 1.54%), 4% at 0.9 (3.88%), 6% at 1 (5.58%, Beckmann,
+/// roughness 1, grazing views across the wide axis). Dielectric from outside: 2% isotropic
+/// (1.56%), 3.5% anisotropic (3.10%). From inside: 3% isotropic (2.51%, roughness
+/// 0.15-0.2 at `mu <= 0.04`), then 5% / 8% / 16% / 26% up to `anisotropic` 0.5 / 0.7 /
+/// 0.9 / 1 (4.65%, 7.57%, 15.7%, 25.4%: wide lobes at roughness 1, whose transmission
+/// peaks over `mu` and the azimuth between the table's nodes).
 fn bound(case: &Case) -> f64 {
     let a = case.anisotropic;
     match case.family {
@@ -215,15 +217,26 @@ fn bound(case: &Case) -> f64 {
             if a <= 0.7 {
                 0.02
             } else if a <= 0.9 {
-                0.05
+                0.04
             } else {
-                0.15
+                0.06
             }
         }
-        Family::DielectricOutside if a == 0.0 => 0.06,
-        Family::DielectricOutside => 0.6,
-        Family::DielectricInside if a == 0.0 => 0.25,
-        Family::DielectricInside => 5.0,
+        Family::DielectricOutside if a == 0.0 => 0.02,
+        Family::DielectricOutside => 0.035,
+        Family::DielectricInside => {
+            if a <= 0.25 {
+                0.03
+            } else if a <= 0.5 {
+                0.05
+            } else if a <= 0.7 {
+                0.08
+            } else if a <= 0.9 {
+                0.16
+            } else {
+                0.26
+            }
+        }
     }
 }
 

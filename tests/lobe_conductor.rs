@@ -209,7 +209,7 @@ fn albedo_error(ndf: Ndf, mode: Mode) -> f64 {
 
 // The reflection table is exact in its Fresnel weighting for Schlick; a complex IOR adds
 // the piecewise-linear interpolation of its departure from Schlick at 13 nodes of wo.m
-// (see `albedo_table`). Measured over the grid above: GGX 0.3% and Beckmann 1.7% for
+// (see `albedo_table`). Measured over the grid above: GGX 0.33% and Beckmann 0.99% for
 // Schlick, the copper-like IOR, gold-like artistic parameters and the low edge tint
 // (0.3) alike; tests/albedo.rs covers grazing, narrow and anisotropic lobes.
 

@@ -1,0 +1,79 @@
+//! The committed albedo tables (`data/albedo/`) must be what `albedo_table::generate`
+//! integrates today. Checking every cell would take minutes, so each table's first and
+//! last cells and 40 cells at pseudo-random positions are recomputed and must match the
+//! committed codes to one quantization step (libm's last bit may differ between
+//! machines). Regenerate every table with
+//! `GLINT_BLESS=1 cargo test --release --test albedo_tables` (minutes on 2 cores) and
+//! commit `data/albedo/`; `GLINT_BLESS=<text>` regenerates only the tables whose file
+//! name contains `<text>`.
+
+use glint::albedo_table::Table;
+use glint::albedo_table::generate::{cell, generate, quantize};
+use std::path::PathBuf;
+
+fn path(table: Table) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("data/albedo")
+        .join(table.file_name())
+}
+
+/// Cells to recompute: both ends and 40 from a fixed-seed LCG.
+fn sampled_cells(cells: usize) -> Vec<usize> {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut out = vec![0, cells - 1];
+    out.extend((0..40).map(|_| {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 33) as usize % cells
+    }));
+    out
+}
+
+#[test]
+fn committed_tables_match_their_generator() {
+    if let Some(bless) = std::env::var_os("GLINT_BLESS") {
+        let only = bless.to_string_lossy().into_owned();
+        for table in Table::ALL {
+            if only != "1" && !table.file_name().contains(&only) {
+                continue;
+            }
+            let start = std::time::Instant::now();
+            std::fs::write(path(table), generate(table)).expect("write table");
+            eprintln!("{}: {:?}", table.file_name(), start.elapsed());
+        }
+    }
+    let mut failures = Vec::new();
+    for table in Table::ALL {
+        let bytes = std::fs::read(path(table)).unwrap_or_default();
+        let channels = table.channels();
+        if bytes.len() != 2 * table.cells() * channels {
+            failures.push(format!(
+                "{}: {} bytes, the layout needs {}",
+                table.file_name(),
+                bytes.len(),
+                2 * table.cells() * channels
+            ));
+            continue;
+        }
+        for index in sampled_cells(table.cells()) {
+            for (k, value) in cell(table, index).into_iter().enumerate() {
+                let at = 2 * (index * channels + k);
+                let committed = u16::from_le_bytes([bytes[at], bytes[at + 1]]);
+                if committed.abs_diff(quantize(value)) > 1 {
+                    failures.push(format!(
+                        "{} cell {index} channel {k}: committed {committed}, generated {}",
+                        table.file_name(),
+                        quantize(value)
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "stale albedo tables (regenerate with GLINT_BLESS=1 cargo test --release --test \
+         albedo_tables):\n{}",
+        failures.join("\n")
+    );
+}
