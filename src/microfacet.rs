@@ -166,8 +166,19 @@ impl<L: Lane> Distribution<L> {
         let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
         let p1 = r * cos_phi;
         let s = L::splat(0.5) * (L::one() + vh.z);
-        let p2 = (L::one() - s) * (L::one() - p1 * p1).safe_sqrt() + s * r * sin_phi;
-        let nh = t1 * p1 + t2 * p2 + vh * (L::one() - p1 * p1 - p2 * p2).safe_sqrt();
+        // `1 - p1^2` and `1 - p1^2 - p2^2` without their cancellation near the disk's
+        // edge (u0 -> 1), where it made the normal hang on the last bits of sin_cos:
+        // with h = sqrt(1 - p1^2) = sqrt((1 - u0) + u0 sin^2), h - r sin = (1 - u0) /
+        // (h + r sin) for sin >= 0, p2 = h - s (h - r sin) and 1 - p1^2 - p2^2 =
+        // (h - p2)(h + p2).
+        let rest = L::one() - u0;
+        let h = (u0 * sin_phi * sin_phi + rest).safe_sqrt();
+        let rs = r * sin_phi;
+        let gap = L::select(sin_phi.ge(L::zero()), rest.safe_div(h + rs), h - rs);
+        let h_minus_p2 = s * gap;
+        let p2 = h - h_minus_p2;
+        let nz = (h_minus_p2 * (h + p2)).safe_sqrt();
+        let nh = t1 * p1 + t2 * p2 + vh * nz;
         Vec3::new(ax * nh.x, ay * nh.y, nh.z.max(L::splat(1e-6))).normalize()
     }
 

@@ -5,9 +5,9 @@
 
 mod common;
 
-use common::{Block, Rng, lobe};
+use common::{Block, Rng, lobe, soa, soa_mut};
 use glint::batch::{
-    self, BLOCK, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, Threads,
+    self, BLOCK, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads,
 };
 use glint::lobes::Transport;
 use glint::math::{Frame, Vec3};
@@ -141,19 +141,6 @@ fn lanes(n: usize, shapes: usize, rng: &mut Rng) -> Lanes {
         });
     }
     l
-}
-
-fn soa(v: &[Vec<f32>; 3]) -> Soa3<'_> {
-    Soa3 {
-        x: &v[0],
-        y: &v[1],
-        z: &v[2],
-    }
-}
-
-fn soa_mut(v: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
-    let [x, y, z] = v;
-    Soa3Mut { x, y, z }
 }
 
 /// Every batch output for one input.

@@ -10,62 +10,24 @@
 mod common;
 mod reference;
 
-use common::{Block, Rng, close, lobe};
+use common::{Block, Rng, close, closure, lobe, rows, soa, soa_mut};
 use glint::Closure;
-use glint::batch::{self, BatchInput, EvalOutput, Exec, Soa3, Soa3Mut, Threads};
-use glint::lobes::Transport;
+use glint::batch::{self, BatchInput, EvalOutput, Exec, Threads};
 use glint::math::{Frame, Vec3};
-use glint::registry::Registry;
 use glint::simd::Kernels;
 use glint::verify::{BATCH_TOLERANCE, batch_difference};
 use reference::{Fresnel, Micro, Ndf, V, cook_torrance, walter};
 
-/// A closure of one lobe of weight 1 in the world frame (local = world).
-fn closure(name: &str, block: &Block) -> Closure {
-    let registry = Registry::with_builtins();
-    let mut c = Closure::new(None, Transport::Radiance);
-    let id = registry.find(name).unwrap();
-    c.add_lobe(
-        &registry,
-        id,
-        [1.0; 3],
-        Frame::IDENTITY,
-        Some(block.as_slice()),
-    )
-    .unwrap();
-    c.finish().unwrap();
-    c
-}
-
-fn rows(v: &[Vec3<f32>]) -> [Vec<f32>; 3] {
-    [
-        v.iter().map(|a| a.x).collect(),
-        v.iter().map(|a| a.y).collect(),
-        v.iter().map(|a| a.z).collect(),
-    ]
-}
-
-fn soa(r: &[Vec<f32>; 3]) -> Soa3<'_> {
-    Soa3 {
-        x: &r[0],
-        y: &r[1],
-        z: &r[2],
-    }
-}
-
-fn soa_mut(r: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
-    let [x, y, z] = r;
-    Soa3Mut { x, y, z }
-}
-
-/// `(value.r, pdf)` of every pair: the scalar closure call first, then one batch per
-/// kernel set.
+/// `(value.r, pdf)` of every pair: the scalar closure call first (on the directions
+/// normalized as the C entry points and the batches normalize them: normalizing a
+/// unit f32 vector again can move it by an ulp), then one batch per kernel set.
 fn evaluate(c: &Closure, wo: &[Vec3<f32>], wi: &[Vec3<f32>]) -> Vec<(String, Vec<(f32, f32)>)> {
+    let unit = |v: Vec3<f32>| Vec3::try_unit(v.x, v.y, v.z, "w").unwrap();
     let scalar = wo
         .iter()
         .zip(wi)
         .map(|(&o, &i)| {
-            let e = c.eval(o, i).unwrap();
+            let e = c.eval(unit(o), unit(i)).unwrap();
             (e.value.r, e.pdf)
         })
         .collect();
@@ -134,7 +96,7 @@ type RefEval<'a> = &'a dyn Fn(V, V) -> (f64, f64);
 /// Check one lobe's grazing sweep, `wo` above and below the surface; `wis` are the
 /// fixed `wi` (world = local).
 fn check_grazing(name: &str, block: &Block, reference: RefEval<'_>, wis: &[V], what: &str) {
-    let c = closure(name, block);
+    let c = closure(name, block, Frame::IDENTITY);
     let zs = grazing_cosines();
     let mut wo = Vec::new();
     let mut wi = Vec::new();
@@ -280,7 +242,7 @@ fn dielectric_over_the_eta_range_matches_the_reference_on_every_isa() {
             for r in [0.2f32, 0.6] {
                 let block = grazing_params("dielectric", ndf, r, 0.0).float("eta", eta);
                 let m = Micro::from_roughness(ndf, r, 0.0);
-                let c = closure("dielectric", &block);
+                let c = closure("dielectric", &block, Frame::IDENTITY);
                 let results = evaluate(&c, &wo, &wi);
                 let scalar = &results[0].1;
                 for (source, lanes) in &results {

@@ -1,9 +1,13 @@
 //! Test plumbing shared by the integration tests: lobe lookup, parameter blocks built
-//! by parameter name from each lobe's schema, a deterministic random generator and
-//! tolerance checks. No expected value is computed here (see `tests/reference`).
+//! by parameter name from each lobe's schema, one-lobe closures, SoA rows for the batch
+//! calls, a deterministic random generator and tolerance checks. No expected value is
+//! computed here (see `tests/reference`).
 #![allow(dead_code)]
 
-use glint::lobes::LobeType;
+use glint::Closure;
+use glint::batch::{Soa3, Soa3Mut};
+use glint::lobes::{LobeType, Transport};
+use glint::math::{Frame, Vec3};
 use glint::params::{ParamKind, ParamSpec, block_size, offset_of, write_defaults};
 use glint::registry::{BUILTINS, Registry};
 
@@ -83,6 +87,39 @@ impl Block {
     pub fn as_slice(&self) -> &[f32] {
         &self.values
     }
+}
+
+/// A finished radiance closure of one lobe of weight 1 in `frame`.
+pub fn closure(name: &str, block: &Block, frame: Frame) -> Closure {
+    let registry = Registry::with_builtins();
+    let mut c = Closure::new(None, Transport::Radiance);
+    let id = registry.find(name).expect("built-in lobe");
+    c.add_lobe(&registry, id, [1.0; 3], frame, Some(block.as_slice()))
+        .expect("valid parameters");
+    c.finish().expect("a new closure finishes");
+    c
+}
+
+/// SoA rows (x, y, z) of `v`.
+pub fn rows(v: &[Vec3<f32>]) -> [Vec<f32>; 3] {
+    [
+        v.iter().map(|a| a.x).collect(),
+        v.iter().map(|a| a.y).collect(),
+        v.iter().map(|a| a.z).collect(),
+    ]
+}
+
+pub fn soa(r: &[Vec<f32>; 3]) -> Soa3<'_> {
+    Soa3 {
+        x: &r[0],
+        y: &r[1],
+        z: &r[2],
+    }
+}
+
+pub fn soa_mut(r: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
+    let [x, y, z] = r;
+    Soa3Mut { x, y, z }
 }
 
 /// SplitMix64: a small deterministic generator for sample points.
