@@ -213,7 +213,8 @@ fn add_lobe(
         match spec.kind {
             ParamKind::Float => block[offset] = number(value, &at(key))?,
             ParamKind::Rgb => block[offset..offset + 3].copy_from_slice(&rgb(value, &at(key))?),
-            ParamKind::Enum(choices) => {
+            ParamKind::Enum => {
+                let choices = spec.choices;
                 let choice = value.as_str().ok_or_else(|| {
                     parse_error(format!(
                         "{}: expected one of {}",

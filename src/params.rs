@@ -11,15 +11,15 @@ use crate::error::{Error, Status};
 pub enum ParamKind {
     Float,
     Rgb,
-    /// One of the named choices, stored as its index.
-    Enum(&'static [&'static str]),
+    /// One of the named choices ([`ParamSpec::choices`]), stored as its index.
+    Enum,
 }
 
 impl ParamKind {
     /// Slots the parameter takes in the block.
     pub const fn size(self) -> usize {
         match self {
-            ParamKind::Float | ParamKind::Enum(_) => 1,
+            ParamKind::Float | ParamKind::Enum => 1,
             ParamKind::Rgb => 3,
         }
     }
@@ -30,6 +30,11 @@ impl ParamKind {
 pub struct ParamSpec {
     pub name: &'static str,
     pub kind: ParamKind,
+    /// The names of an `enum`'s choices; empty otherwise. A field rather than the
+    /// variant's payload: a `Float` or `Rgb` variant built at run time (plugin schemas)
+    /// would leave a payload's bytes uninitialized, and optimized code reading the kind
+    /// loaded them speculatively (valgrind reported the branch).
+    pub choices: &'static [&'static str],
     /// Default value (all three channels for `rgb`, the choice index for `enum`).
     pub default: [f32; 3],
     /// Valid range of each component (inclusive); for `enum`, `[0, choices - 1]`.
@@ -49,6 +54,7 @@ impl ParamSpec {
         ParamSpec {
             name,
             kind: ParamKind::Float,
+            choices: &[],
             default: [default; 3],
             min,
             max,
@@ -65,6 +71,7 @@ impl ParamSpec {
         ParamSpec {
             name,
             kind: ParamKind::Rgb,
+            choices: &[],
             default,
             min,
             max,
@@ -79,7 +86,8 @@ impl ParamSpec {
     ) -> Self {
         ParamSpec {
             name,
-            kind: ParamKind::Enum(choices),
+            kind: ParamKind::Enum,
+            choices,
             default: [default as f32; 3],
             min: 0.0,
             max: (choices.len() - 1) as f32,
@@ -89,10 +97,7 @@ impl ParamSpec {
 
     /// The enum choices, empty for numeric parameters.
     pub fn choices(&self) -> &'static [&'static str] {
-        match self.kind {
-            ParamKind::Enum(c) => c,
-            _ => &[],
-        }
+        self.choices
     }
 
     /// Index of a choice by name, with an error listing the valid ones.
@@ -134,7 +139,7 @@ pub fn same_choices(specs: &[ParamSpec], a: &[f32], b: &[f32]) -> bool {
     specs.iter().all(|s| {
         let at = offset;
         offset += s.kind.size();
-        !matches!(s.kind, ParamKind::Enum(_)) || a[at] == b[at]
+        s.kind != ParamKind::Enum || a[at] == b[at]
     })
 }
 
@@ -171,7 +176,8 @@ pub fn validate(lobe: &str, specs: &[ParamSpec], block: &[f32]) -> Result<(), Er
                     format!("{lobe}.{}: value {v} is not finite", spec.name),
                 ));
             }
-            if let ParamKind::Enum(choices) = spec.kind {
+            if spec.kind == ParamKind::Enum {
+                let choices = spec.choices;
                 if v.fract() != 0.0 || v < 0.0 || v as usize >= choices.len() {
                     return Err(Error::new(
                         Status::OutOfRange,

@@ -310,7 +310,7 @@ fn reference_quadrature_converged() {
 }
 
 /// Prints the first-use cost of the tables (no assertion: timing is noisy). Run alone,
-/// in a fresh process, so that no other test has built the tables.
+/// in a fresh process, so that no other test has decoded the tables.
 #[test]
 #[ignore = "prints timings"]
 fn table_first_use_time() {

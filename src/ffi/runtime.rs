@@ -446,7 +446,7 @@ pub unsafe extern "C" fn glint_lobe_param_info(
             param_type: match spec.kind {
                 ParamKind::Float => GLINT_PARAM_FLOAT,
                 ParamKind::Rgb => GLINT_PARAM_RGB,
-                ParamKind::Enum(_) => GLINT_PARAM_ENUM,
+                ParamKind::Enum => GLINT_PARAM_ENUM,
             },
             offset: params::offset_of(specs, index as usize) as u32,
             size: spec.kind.size() as u32,
@@ -527,7 +527,7 @@ pub unsafe extern "C" fn glint_lobe_param_choice(
                 format!("{}: parameter index {index} is out of range", t.name()),
             )
         })?;
-        if !matches!(spec.kind, ParamKind::Enum(_)) {
+        if spec.kind != ParamKind::Enum {
             return Err(Error::new(
                 Status::InvalidArgument,
                 format!("{}.{} is not an enum parameter", t.name(), spec.name),

@@ -367,9 +367,9 @@ fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
         } else {
             plugin_str(p.doc, "doc")?
         };
-        let kind = match p.kind {
-            abi::PARAM_FLOAT => ParamKind::Float,
-            abi::PARAM_RGB => ParamKind::Rgb,
+        let (kind, choices) = match p.kind {
+            abi::PARAM_FLOAT => (ParamKind::Float, &[][..]),
+            abi::PARAM_RGB => (ParamKind::Rgb, &[][..]),
             abi::PARAM_ENUM => {
                 if p.choice_count == 0 || p.choices.is_null() {
                     return Err(bad(format!("parameter {name}: an enum needs choices")));
@@ -381,7 +381,7 @@ fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
                             .map(intern_str)
                     })
                     .collect::<Result<_, _>>()?;
-                ParamKind::Enum(intern(choices).as_slice())
+                (ParamKind::Enum, intern(choices).as_slice())
             }
             k => return Err(bad(format!("parameter {name}: unknown type {k}"))),
         };
@@ -396,7 +396,7 @@ fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
             return Err(bad(format!("parameter {name} is declared twice")));
         }
         let spec = match kind {
-            ParamKind::Enum(choices) => {
+            ParamKind::Enum => {
                 let index = p.default_value[0];
                 if !(index >= 0.0 && (index as usize) < choices.len() && index.fract() == 0.0) {
                     return Err(bad(format!(
@@ -425,6 +425,7 @@ fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
                 ParamSpec {
                     name,
                     kind,
+                    choices,
                     default: if n == 1 {
                         [p.default_value[0]; 3]
                     } else {

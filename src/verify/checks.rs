@@ -705,8 +705,9 @@ fn random_block(lobe: &dyn LobeType, rng: &mut Rng) -> Vec<f32> {
         let offset = params::offset_of(specs, i);
         for slot in &mut block[offset..offset + spec.kind.size()] {
             *slot = match spec.kind {
-                ParamKind::Enum(choices) => {
-                    ((rng.uniform() * choices.len() as f32) as usize).min(choices.len() - 1) as f32
+                ParamKind::Enum => {
+                    let n = spec.choices.len();
+                    ((rng.uniform() * n as f32) as usize).min(n - 1) as f32
                 }
                 _ if spec.min > 0.0 && spec.max / spec.min > 100.0 => (spec.min.ln()
                     + rng.uniform() * (spec.max / spec.min).ln())

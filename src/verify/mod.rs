@@ -215,10 +215,10 @@ pub fn narrow_sets(lobe: &dyn LobeType) -> Vec<ParamSet> {
         block: base.clone(),
     }];
     for (i, spec) in specs.iter().enumerate() {
-        let ParamKind::Enum(choices) = spec.kind else {
+        if spec.kind != ParamKind::Enum {
             continue;
-        };
-        for (c, choice) in choices.iter().enumerate() {
+        }
+        for (c, choice) in spec.choices.iter().enumerate() {
             let mut block = base.clone();
             block[params::offset_of(specs, i)] = c as f32;
             if sets.iter().all(|s| s.block != block) {
@@ -270,7 +270,7 @@ pub fn corner_sets(lobe: &dyn LobeType) -> Vec<Vec<f32>> {
         let offset = params::offset_of(specs, i);
         let n = spec.kind.size();
         let values = match spec.kind {
-            ParamKind::Enum(choices) => (0..choices.len()).map(|c| c as f32).collect(),
+            ParamKind::Enum => (0..spec.choices.len()).map(|c| c as f32).collect(),
             _ => corner_values(spec.min, spec.max),
         };
         for v in values {
