@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{Block, Rng, lobe, soa, soa_mut};
+use common::{Block, Outputs, Rng, lobe, soa, soa_mut};
 use glint::batch::{
     self, BLOCK, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads,
 };
@@ -143,24 +143,6 @@ fn lanes(n: usize, shapes: usize, rng: &mut Rng) -> Lanes {
     l
 }
 
-/// Every batch output for one input.
-#[derive(PartialEq, Debug)]
-struct Outputs {
-    value: [Vec<f32>; 3],
-    pdf: Vec<f32>,
-    pdf_reverse: Vec<f32>,
-    pdf_only: Vec<f32>,
-    albedo: [Vec<f32>; 3],
-    s_wi: [Vec<f32>; 3],
-    s_weight: [Vec<f32>; 3],
-    s_value: [Vec<f32>; 3],
-    s_pdf: Vec<f32>,
-    s_flags: Vec<u32>,
-    s_lobe: Vec<u32>,
-    s_eta: Vec<f32>,
-    s_roughness: Vec<f32>,
-}
-
 /// Run every batch entry point; `Err` carries each call's error.
 fn run(
     exec: &Exec<'_>,
@@ -169,22 +151,7 @@ fn run(
 ) -> (Outputs, Vec<Result<(), glint::Error>>) {
     let n = per_lane.len();
     // Outputs start at a sentinel so lanes left untouched are visible.
-    let rows = || [vec![-7.0; n], vec![-7.0; n], vec![-7.0; n]];
-    let mut o = Outputs {
-        value: rows(),
-        pdf: vec![-7.0; n],
-        pdf_reverse: vec![-7.0; n],
-        pdf_only: vec![-7.0; n],
-        albedo: rows(),
-        s_wi: rows(),
-        s_weight: rows(),
-        s_value: rows(),
-        s_pdf: vec![-7.0; n],
-        s_flags: vec![99; n],
-        s_lobe: vec![99; n],
-        s_eta: vec![-7.0; n],
-        s_roughness: vec![-7.0; n],
-    };
+    let mut o = Outputs::filled(n, -7.0, 99);
     let input = BatchInput {
         count: n,
         closures: per_lane,

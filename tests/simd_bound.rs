@@ -27,7 +27,7 @@
 mod common;
 mod reference;
 
-use common::{Block, Rng, closure, lobe, rows, soa, soa_mut};
+use common::{Block, Outputs, Rng, closure, lobe, rows, soa, soa_mut};
 use glint::Closure;
 use glint::batch::{self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads};
 use glint::lobes::flags;
@@ -259,36 +259,9 @@ enum Check {
     Sample,
 }
 
-struct Outputs {
-    value: [Vec<f32>; 3],
-    pdf: Vec<f32>,
-    pdf_reverse: Vec<f32>,
-    albedo: [Vec<f32>; 3],
-    s_wi: [Vec<f32>; 3],
-    s_weight: [Vec<f32>; 3],
-    s_value: [Vec<f32>; 3],
-    s_pdf: Vec<f32>,
-    s_flags: Vec<u32>,
-}
-
 impl Outputs {
-    fn new(n: usize) -> Outputs {
-        let r = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-        Outputs {
-            value: r(),
-            pdf: vec![0.0; n],
-            pdf_reverse: vec![0.0; n],
-            albedo: r(),
-            s_wi: r(),
-            s_weight: r(),
-            s_value: r(),
-            s_pdf: vec![0.0; n],
-            s_flags: vec![0; n],
-        }
-    }
-
     fn scalar(check: Check, c: &Closure, p: &Pairs) -> Outputs {
-        let mut o = Outputs::new(p.wo.len());
+        let mut o = Outputs::filled(p.wo.len(), 0.0, 0);
         let unit = |v: Vec3<f32>| Vec3::try_unit(v.x, v.y, v.z, "w").unwrap();
         for k in 0..p.wo.len() {
             let wo = unit(p.wo[k]);
@@ -316,7 +289,7 @@ impl Outputs {
 
     fn batch(check: Check, kernels: Kernels, c: &Closure, p: &Pairs) -> Outputs {
         let n = p.wo.len();
-        let mut o = Outputs::new(n);
+        let mut o = Outputs::filled(n, 0.0, 0);
         let exec = Exec {
             kernels,
             threads: Threads::Caller,

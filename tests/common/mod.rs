@@ -180,3 +180,44 @@ pub fn assert_close3(actual: [f32; 3], expected: [f64; 3], rel: f64, abs: f64, w
         );
     }
 }
+
+/// Every output of the four batch calls for `n` lanes, as SoA rows.
+#[derive(PartialEq, Debug)]
+pub struct Outputs {
+    pub value: [Vec<f32>; 3],
+    pub pdf: Vec<f32>,
+    pub pdf_reverse: Vec<f32>,
+    pub pdf_only: Vec<f32>,
+    pub albedo: [Vec<f32>; 3],
+    pub s_wi: [Vec<f32>; 3],
+    pub s_weight: [Vec<f32>; 3],
+    pub s_value: [Vec<f32>; 3],
+    pub s_pdf: Vec<f32>,
+    pub s_flags: Vec<u32>,
+    pub s_lobe: Vec<u32>,
+    pub s_eta: Vec<f32>,
+    pub s_roughness: Vec<f32>,
+}
+
+impl Outputs {
+    /// Every float output `value` and every integer output `code` (a sentinel shows
+    /// the lanes a call left untouched).
+    pub fn filled(n: usize, value: f32, code: u32) -> Outputs {
+        let rows = || [vec![value; n], vec![value; n], vec![value; n]];
+        Outputs {
+            value: rows(),
+            pdf: vec![value; n],
+            pdf_reverse: vec![value; n],
+            pdf_only: vec![value; n],
+            albedo: rows(),
+            s_wi: rows(),
+            s_weight: rows(),
+            s_value: rows(),
+            s_pdf: vec![value; n],
+            s_flags: vec![code; n],
+            s_lobe: vec![code; n],
+            s_eta: vec![value; n],
+            s_roughness: vec![value; n],
+        }
+    }
+}
