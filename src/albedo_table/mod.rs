@@ -419,7 +419,6 @@ impl DielectricTable {
         let (phi, aspect) = anisotropic_coordinates(wo, dist);
         let (s0, fs) = grid(aspect, NS);
         let (p0, fp) = grid(phi, NP);
-        let (z0, fz) = grid(t * L::splat(1.0 / T_MAX), DT);
         let (x0, fx) = grid(x, DX_ANISO);
         let row = DR * DX_ANISO;
         let [ra, ta] = interpolate(
