@@ -173,10 +173,20 @@ pub trait Model: Send + Sync + 'static {
     /// Documented relative accuracy of `albedo` with these parameters (the harness checks it).
     fn albedo_tolerance(params: &[f32]) -> f32;
 
-    /// Parameters decoded once per call (Fresnel resolved, roughness mapped).
+    /// Length of the decoded block [`Model::decode`] writes.
+    const DECODED_LEN: usize = crate::params::block_size(Self::PARAMS);
+    /// Decode a validated parameter block once, in `f32` (when a lobe is added to a
+    /// closure): roughness to alpha, Fresnel mode resolved, Gulbrandsen to complex IOR.
+    /// `out` has [`Model::DECODED_LEN`] values. The default copies the block.
+    fn decode(params: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(params);
+    }
+
+    /// A decoded block as the model's functions read it.
     type Prepared<L: Lane>;
 
-    fn prepare<L: Lane>(params: Params<'_, L>) -> Self::Prepared<L>;
+    /// Read a decoded block ([`Model::decode`]) into lanes.
+    fn prepare<L: Lane>(decoded: Params<'_, L>) -> Self::Prepared<L>;
     fn eval<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L>;
     /// `uc` chooses among discrete events (reflect or refract); `u0`, `u1` pick the direction.
     fn sample<L: Lane>(
@@ -200,6 +210,41 @@ pub trait LobeType: Send + Sync {
     fn flags(&self) -> u32;
     fn reciprocal(&self) -> bool;
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32>;
+
+    /// Length of this type's decoded parameter block.
+    fn decoded_len(&self) -> usize {
+        crate::params::block_size(self.params())
+    }
+    /// Decode a validated parameter block once (closures store the result; the
+    /// `*_decoded` calls and the batch jobs read it). The default copies it.
+    fn decode(&self, params: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(params);
+    }
+    /// [`LobeType::eval`] from a decoded block.
+    fn eval_decoded(
+        &self,
+        decoded: &[f32],
+        wo: Vec3<f32>,
+        wi: Vec3<f32>,
+        mode: Transport,
+    ) -> Eval<f32> {
+        self.eval(decoded, wo, wi, mode)
+    }
+    /// [`LobeType::sample`] from a decoded block.
+    fn sample_decoded(
+        &self,
+        decoded: &[f32],
+        wo: Vec3<f32>,
+        u: [f32; 3],
+        mode: Transport,
+    ) -> Sample<f32> {
+        self.sample(decoded, wo, u, mode)
+    }
+    /// [`LobeType::albedo`] from a decoded block.
+    fn albedo_decoded(&self, decoded: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
+        self.albedo(decoded, wo, mode)
+    }
+
     /// `eval(wo, wi)` and the reverse pdf `eval(wi, wo).pdf` (built-in lobes decode
     /// their parameters once for both).
     fn eval_with_reverse(
@@ -228,18 +273,19 @@ pub trait LobeType: Send + Sync {
         0
     }
 
-    /// `eval` over a group of lanes (the batch kernels). The default loops over
-    /// [`LobeType::eval`]; built-in lobes run their SIMD kernels.
+    /// `eval` over a group of lanes (the batch kernels), whose parameters are decoded
+    /// blocks. The default loops over [`LobeType::eval_decoded`]; built-in lobes run
+    /// their SIMD kernels.
     fn eval_lanes(&self, _kernels: Kernels, job: &mut EvalJob<'_>) {
-        kernels::eval_each_lane(job, |params, wo, wi, mode| self.eval(params, wo, wi, mode));
+        kernels::eval_each_lane(job, |d, wo, wi, mode| self.eval_decoded(d, wo, wi, mode));
     }
-    /// `sample` over a group of lanes; the default loops over [`LobeType::sample`].
+    /// `sample` over a group of lanes; the default loops over [`LobeType::sample_decoded`].
     fn sample_lanes(&self, _kernels: Kernels, job: &mut SampleJob<'_>) {
-        kernels::sample_each_lane(job, |params, wo, u, mode| self.sample(params, wo, u, mode));
+        kernels::sample_each_lane(job, |d, wo, u, mode| self.sample_decoded(d, wo, u, mode));
     }
-    /// `albedo` over a group of lanes; the default loops over [`LobeType::albedo`].
+    /// `albedo` over a group of lanes; the default loops over [`LobeType::albedo_decoded`].
     fn albedo_lanes(&self, _kernels: Kernels, job: &mut AlbedoJob<'_>) {
-        kernels::albedo_each_lane(job, |params, wo, mode| self.albedo(params, wo, mode));
+        kernels::albedo_each_lane(job, |d, wo, mode| self.albedo_decoded(d, wo, mode));
     }
 }
 
@@ -283,7 +329,7 @@ impl<M: Model> LobeType for Builtin<M> {
         M::RECIPROCAL
     }
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
-        M::eval(&M::prepare(Params::new(params)), wo, wi, mode)
+        self.eval_decoded(&decoded::<M>(params), wo, wi, mode)
     }
     fn eval_with_reverse(
         &self,
@@ -292,14 +338,50 @@ impl<M: Model> LobeType for Builtin<M> {
         wi: Vec3<f32>,
         mode: Transport,
     ) -> (Eval<f32>, f32) {
-        let p = M::prepare(Params::new(params));
+        let d = decoded::<M>(params);
+        let p = M::prepare(Params::new(&d));
         (M::eval(&p, wo, wi, mode), M::eval(&p, wi, wo, mode).pdf)
     }
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32> {
-        M::sample(&M::prepare(Params::new(params)), wo, u[0], u[1], u[2], mode).finish()
+        self.sample_decoded(&decoded::<M>(params), wo, u, mode)
     }
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
-        M::albedo(&M::prepare(Params::new(params)), wo, mode)
+        self.albedo_decoded(&decoded::<M>(params), wo, mode)
+    }
+    fn decoded_len(&self) -> usize {
+        M::DECODED_LEN
+    }
+    fn decode(&self, params: &[f32], out: &mut [f32]) {
+        M::decode(params, out);
+    }
+    fn eval_decoded(
+        &self,
+        decoded: &[f32],
+        wo: Vec3<f32>,
+        wi: Vec3<f32>,
+        mode: Transport,
+    ) -> Eval<f32> {
+        M::eval(&M::prepare(Params::new(decoded)), wo, wi, mode)
+    }
+    fn sample_decoded(
+        &self,
+        decoded: &[f32],
+        wo: Vec3<f32>,
+        u: [f32; 3],
+        mode: Transport,
+    ) -> Sample<f32> {
+        M::sample(
+            &M::prepare(Params::new(decoded)),
+            wo,
+            u[0],
+            u[1],
+            u[2],
+            mode,
+        )
+        .finish()
+    }
+    fn albedo_decoded(&self, decoded: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
+        M::albedo(&M::prepare(Params::new(decoded)), wo, mode)
     }
     fn verify_cases(&self) -> &[VerifyCase] {
         M::VERIFY_CASES
@@ -315,6 +397,27 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn albedo_lanes(&self, kernels: Kernels, job: &mut AlbedoJob<'_>) {
         kernels::albedo::<M>(kernels, job);
+    }
+}
+
+/// Most values a decoded parameter block holds (as the SIMD kernels' register file).
+pub const MAX_DECODED_LEN: usize = kernels::MAX_LOBE_PARAMS;
+
+/// `params` decoded into a stack block (its first `M::DECODED_LEN` values).
+#[inline(always)]
+fn decoded<M: Model>(params: &[f32]) -> DecodedBlock {
+    let mut block = DecodedBlock([0.0; MAX_DECODED_LEN], M::DECODED_LEN);
+    M::decode(params, &mut block.0[..M::DECODED_LEN]);
+    block
+}
+
+/// A decoded block on the stack.
+struct DecodedBlock([f32; MAX_DECODED_LEN], usize);
+
+impl std::ops::Deref for DecodedBlock {
+    type Target = [f32];
+    fn deref(&self) -> &[f32] {
+        &self.0[..self.1]
     }
 }
 
