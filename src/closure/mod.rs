@@ -409,21 +409,28 @@ impl Closure {
         mixture: Option<f32>,
     ) -> Result<SampleResult, Error> {
         let l = &self.lobes[k];
+        // The lobe's value and pdf are its eval at exactly the returned world-space
+        // `wi` (`LobeType::sample_world`); the other lobes are evaluated there.
         let s = l
             .lobe
-            .sample(self.lobe_params(k), l.frame.to_local(wo), u, self.mode);
+            .sample_world(self.lobe_params(k), &l.frame, wo, u, self.mode);
         if !s.valid {
             return Err(no_sample());
         }
-        let wi = l.frame.to_world(s.wi).normalize();
-        // Value and pdf at the returned world-space `wi`, exactly what `eval` and
-        // `eval_lobe` give there: the frame round trip and normalization move `wi` by
-        // a few ulps, which a narrow lobe at grazing amplifies past 1e-3.
+        let wi = s.wi;
+        let own = (l.weight * s.value, s.pdf);
         let (value, pdf) = match mixture {
-            Some(p) if s.delta => (l.weight * s.value, p * s.pdf),
-            None if s.delta => (l.weight * s.value, s.pdf),
-            Some(_) => self.mixture(wo, wi),
-            None => self.eval_one(k, wo, wi),
+            Some(p) if s.delta => (own.0, p * own.1),
+            // Summed in lobe order, as `eval` sums them.
+            Some(_) => (0..self.lobe_count).fold((Rgb::zero(), 0.0), |(value, pdf), j| {
+                let (v, q) = if j == k {
+                    own
+                } else {
+                    self.eval_one(j, wo, wi)
+                };
+                (value + v, pdf + self.lobes[j].probability * q)
+            }),
+            None => own,
         };
         let weight = sample_weight(value, pdf).ok_or_else(no_sample)?;
         Ok(SampleResult {

@@ -18,7 +18,7 @@
 //! One-sided: 0 when either direction is below the surface.
 
 use super::fresnel_params::{self, with_fresnel_params};
-use super::{Eval, Model, Params, Sample, Transport, VerifyCase, both_above, flags};
+use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
 use crate::albedo_table::ReflectionTable;
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
@@ -142,11 +142,12 @@ impl Model for Conductor {
         u0: L,
         u1: L,
         mode: Transport,
+        settle: &mut impl Settle<L>,
     ) -> Sample<L> {
         let delta = p.dist.is_delta();
         let up = Vec3::splat(0.0, 0.0, 1.0);
         let m = Vec3::select(delta, up, p.dist.sample_visible(wo, u0, u1));
-        let wi = wo.reflect(m);
+        let wi = settle.settle(wo.reflect(m));
         // Value and pdf through eval, so that both agree to the last bit: narrow lobes
         // amplify the rounding between the sampled m and eval's half vector.
         let e = Self::eval(p, wo, wi, mode);

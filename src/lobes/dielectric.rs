@@ -22,7 +22,7 @@
 //! aspect and view azimuth), the transmitted part times `1 / eta'^2` in radiance.
 
 use super::conductor::{DISTRIBUTION_CHOICES, ndf_kind};
-use super::{Eval, Model, Params, Sample, Transport, VerifyCase, flags};
+use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, flags};
 use crate::albedo_table::DielectricTable;
 use crate::fresnel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
@@ -250,6 +250,7 @@ impl Model for Dielectric {
         u0: L,
         u1: L,
         mode: Transport,
+        settle: &mut impl Settle<L>,
     ) -> Sample<L> {
         let up = Vec3::splat(0.0, 0.0, 1.0);
         let wm = Vec3::select(p.smooth, up, p.dist.sample_visible(wo, u0, u1));
@@ -257,7 +258,7 @@ impl Model for Dielectric {
         let f = fresnel::dielectric_sin2(wo_m, wo.cross(wm).length_squared(), p.eta);
         let reflect = uc.lt(f);
         let (wt, etap_t, no_tir) = refract(wo, wm, p.eta);
-        let wi = Vec3::select(reflect, wo.reflect(wm), wt);
+        let wi = settle.settle(Vec3::select(reflect, wo.reflect(wm), wt));
         let etap = L::select(reflect, L::one(), etap_t);
         let same_side = same_sign(wo.z, wi.z);
         let opposite = same_sign(-wo.z, wi.z);

@@ -7,7 +7,7 @@
 //! Sampling is cosine-weighted (`pdf = cos theta_i / pi`), so the sample weight is
 //! exactly `color`. Albedo is the closed form `color`. One-sided: 0 below the surface.
 
-use super::{Eval, Model, Params, Sample, Transport, VerifyCase, both_above, flags};
+use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
 use crate::math::{INV_PI, Lane, Mask, PI, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
 
@@ -74,14 +74,15 @@ impl Model for Lambert {
         u0: L,
         u1: L,
         _mode: Transport,
+        settle: &mut impl Settle<L>,
     ) -> Sample<L> {
         // Malley's method: uniform disk point lifted to the hemisphere.
         let r = u0.sqrt();
         let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
         let z = (L::one() - u0).safe_sqrt();
-        let wi = Vec3::new(r * cos_phi, r * sin_phi, z);
+        let wi = settle.settle(Vec3::new(r * cos_phi, r * sin_phi, z));
         let valid = both_above(wo, wi);
-        let pdf = z * L::splat(INV_PI);
+        let pdf = L::select(valid, wi.z, L::zero()) * L::splat(INV_PI);
         Sample {
             wi,
             value: p.color * pdf,

@@ -9,7 +9,7 @@
 //! probability) and the SPECULAR flag. Albedo is exactly `F(cos_o)`. One-sided.
 
 use super::fresnel_params::{self, with_fresnel_params};
-use super::{Eval, Model, Params, Sample, Transport, VerifyCase, flags};
+use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, flags};
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
@@ -66,9 +66,10 @@ impl Model for Mirror {
         _u0: L,
         _u1: L,
         _mode: Transport,
+        settle: &mut impl Settle<L>,
     ) -> Sample<L> {
         Sample {
-            wi: Vec3::new(-wo.x, -wo.y, wo.z),
+            wi: settle.settle(Vec3::new(-wo.x, -wo.y, wo.z)),
             value: p.fresnel.eval(wo.z),
             pdf: L::one(),
             valid: wo.z.gt(L::zero()),

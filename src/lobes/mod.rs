@@ -17,7 +17,7 @@ pub mod fresnel_params;
 pub mod lambert;
 pub mod mirror;
 
-use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::params::ParamSpec;
 use crate::simd::Kernels;
 use crate::simd::kernels::{self, AlbedoJob, EvalJob, SampleJob};
@@ -130,6 +130,51 @@ impl<L: Lane> Sample<L> {
     }
 }
 
+/// Where a sampled local direction ends up. A closure returns samples in world space:
+/// the local direction its `eval` then sees is the world one taken back to the
+/// lobe's frame, a few ulps from the sampled one, which a narrow lobe at grazing
+/// turns into a large change of value. Settling first lets the sample compute value
+/// and pdf at exactly that direction, with no second evaluation.
+pub trait Settle<L: Lane> {
+    /// The local direction the caller will see for the sampled local `wi`.
+    fn settle(&mut self, wi: Vec3<L>) -> Vec3<L>;
+}
+
+/// Samples returned in the lobe's frame (lobe calls, the harness): nothing moves.
+pub struct InPlace;
+
+impl<L: Lane> Settle<L> for InPlace {
+    #[inline(always)]
+    fn settle(&mut self, wi: Vec3<L>) -> Vec3<L> {
+        wi
+    }
+}
+
+/// Samples returned in world space through `frame`; `world` holds the last settled
+/// direction (unit, world space).
+pub struct ToWorld<L> {
+    pub frame: LaneFrame<L>,
+    pub world: Vec3<L>,
+}
+
+impl<L: Lane> ToWorld<L> {
+    #[inline(always)]
+    pub fn new(frame: LaneFrame<L>) -> Self {
+        ToWorld {
+            frame,
+            world: Vec3::new(L::zero(), L::zero(), L::zero()),
+        }
+    }
+}
+
+impl<L: Lane> Settle<L> for ToWorld<L> {
+    #[inline(always)]
+    fn settle(&mut self, wi: Vec3<L>) -> Vec3<L> {
+        self.world = self.frame.to_world(wi).normalize();
+        self.frame.to_local(self.world)
+    }
+}
+
 /// Read access to a lobe's parameter block, laid out by its schema.
 #[derive(Clone, Copy)]
 pub struct Params<'a, L> {
@@ -188,7 +233,10 @@ pub trait Model: Send + Sync + 'static {
     /// Read a decoded block ([`Model::decode`]) into lanes.
     fn prepare<L: Lane>(decoded: Params<'_, L>) -> Self::Prepared<L>;
     fn eval<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L>;
-    /// `uc` chooses among discrete events (reflect or refract); `u0`, `u1` pick the direction.
+    /// `uc` chooses among discrete events (reflect or refract); `u0`, `u1` pick the
+    /// direction. The sampled direction goes through `settle` before anything is
+    /// computed from it: value, pdf and validity are those of the settled direction,
+    /// which is the one returned (the direction the caller's `eval` will see).
     fn sample<L: Lane>(
         p: &Self::Prepared<L>,
         wo: Vec3<L>,
@@ -196,6 +244,7 @@ pub trait Model: Send + Sync + 'static {
         u0: L,
         u1: L,
         mode: Transport,
+        settle: &mut impl Settle<L>,
     ) -> Sample<L>;
     /// Directional albedo `R(wo)`: the integral of `eval(wo, wi)` over all `wi`.
     fn albedo<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, mode: Transport) -> Rgb<L>;
@@ -239,6 +288,28 @@ pub trait LobeType: Send + Sync {
         mode: Transport,
     ) -> Sample<f32> {
         self.sample(decoded, wo, u, mode)
+    }
+    /// Sample in `frame` from the world-space `wo`: the returned `wi` is world space
+    /// (unit), and value and pdf are exactly `eval_decoded` at `frame.to_local(wi)`.
+    /// The default samples locally and evaluates there again; built-in lobes settle
+    /// the direction first ([`Settle`]) and evaluate once.
+    fn sample_world(
+        &self,
+        decoded: &[f32],
+        frame: &Frame,
+        wo: Vec3<f32>,
+        u: [f32; 3],
+        mode: Transport,
+    ) -> Sample<f32> {
+        let wo = frame.to_local(wo);
+        let mut s = self.sample_decoded(decoded, wo, u, mode);
+        let world = frame.to_world(s.wi).normalize();
+        if s.valid && !s.delta {
+            let e = self.eval_decoded(decoded, wo, frame.to_local(world), mode);
+            (s.value, s.pdf) = (e.value, e.pdf);
+        }
+        s.wi = world;
+        s.finish()
     }
     /// [`LobeType::albedo`] from a decoded block.
     fn albedo_decoded(&self, decoded: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
@@ -370,15 +441,22 @@ impl<M: Model> LobeType for Builtin<M> {
         u: [f32; 3],
         mode: Transport,
     ) -> Sample<f32> {
-        M::sample(
-            &M::prepare(Params::new(decoded)),
-            wo,
-            u[0],
-            u[1],
-            u[2],
-            mode,
-        )
-        .finish()
+        let p = M::prepare(Params::new(decoded));
+        M::sample(&p, wo, u[0], u[1], u[2], mode, &mut InPlace).finish()
+    }
+    fn sample_world(
+        &self,
+        decoded: &[f32],
+        frame: &Frame,
+        wo: Vec3<f32>,
+        u: [f32; 3],
+        mode: Transport,
+    ) -> Sample<f32> {
+        let p = M::prepare(Params::new(decoded));
+        let mut settle = ToWorld::new(LaneFrame::splat(frame));
+        let mut s = M::sample(&p, frame.to_local(wo), u[0], u[1], u[2], mode, &mut settle);
+        s.wi = settle.world;
+        s.finish()
     }
     fn albedo_decoded(&self, decoded: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
         M::albedo(&M::prepare(Params::new(decoded)), wo, mode)

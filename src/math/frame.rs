@@ -1,6 +1,7 @@
 //! Orthonormal shading frames: each lobe of a closure carries its own
 //! (seed 000 "Layering": layers may have their own bumped normals).
 
+use super::Lane;
 use super::vec::Vec3;
 
 /// Tangent `t`, bitangent `b = n x t` and normal `n`, all unit length and orthogonal.
@@ -76,6 +77,35 @@ impl Frame {
 
     #[inline]
     pub fn to_world(&self, v: Vec3<f32>) -> Vec3<f32> {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+}
+
+/// A shading frame with one lane per component (a [`Frame`] splatted, or one frame
+/// per lane).
+#[derive(Clone, Copy, Debug)]
+pub struct LaneFrame<L> {
+    pub t: Vec3<L>,
+    pub b: Vec3<L>,
+    pub n: Vec3<L>,
+}
+
+impl<L: Lane> LaneFrame<L> {
+    #[inline(always)]
+    pub fn splat(f: &Frame) -> Self {
+        let v = |v: Vec3<f32>| Vec3::splat(v.x, v.y, v.z);
+        LaneFrame {
+            t: v(f.t),
+            b: v(f.b),
+            n: v(f.n),
+        }
+    }
+    #[inline(always)]
+    pub fn to_local(&self, v: Vec3<L>) -> Vec3<L> {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+    #[inline(always)]
+    pub fn to_world(&self, v: Vec3<L>) -> Vec3<L> {
         self.t * v.x + self.b * v.y + self.n * v.z
     }
 }

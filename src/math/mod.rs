@@ -7,7 +7,7 @@ pub mod special;
 pub mod vec;
 pub mod vmath;
 
-pub use frame::Frame;
+pub use frame::{Frame, LaneFrame};
 pub use lane::{Lane, Mask};
 pub use vec::{Rgb, Vec3};
 

@@ -8,8 +8,8 @@
 //! per register of lanes otherwise.
 
 use super::Kernels;
-use crate::lobes::{Model, Params, Transport};
-use crate::math::{Frame, Lane, Mask, Rgb, Vec3};
+use crate::lobes::{Model, Params, ToWorld, Transport};
+use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3};
 
 /// Most parameter values one lobe type may have to run in the SIMD kernels.
 pub const MAX_LOBE_PARAMS: usize = 64;
@@ -86,33 +86,6 @@ pub struct AlbedoJob<'a> {
     pub wo: [&'a [f32]; 3],
     pub lobe: LobeLanes<'a>,
     pub value: [&'a mut [f32]; 3],
-}
-
-/// A shading frame with one lane per component.
-struct LaneFrame<L> {
-    t: Vec3<L>,
-    b: Vec3<L>,
-    n: Vec3<L>,
-}
-
-impl<L: Lane> LaneFrame<L> {
-    #[inline(always)]
-    fn splat(f: &Frame) -> Self {
-        let v = |v: Vec3<f32>| Vec3::splat(v.x, v.y, v.z);
-        LaneFrame {
-            t: v(f.t),
-            b: v(f.b),
-            n: v(f.n),
-        }
-    }
-    #[inline(always)]
-    fn to_local(&self, v: Vec3<L>) -> Vec3<L> {
-        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
-    }
-    #[inline(always)]
-    fn to_world(&self, v: Vec3<L>) -> Vec3<L> {
-        self.t * v.x + self.b * v.y + self.n * v.z
-    }
 }
 
 /// A lobe instance's per-lane data, loaded or splatted.
@@ -246,8 +219,14 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for SampleJob<'_> {
             L::load(&self.u[1][i..]),
             L::load(&self.u[2][i..]),
         );
-        let s = M::sample(p, wo, uc, u0, u1, self.mode).finish();
-        let w = lanes.frame.to_world(s.wi).normalize();
+        let mut settle = ToWorld::new(lanes.frame);
+        let s = M::sample(p, wo, uc, u0, u1, self.mode, &mut settle);
+        let s = crate::lobes::Sample {
+            wi: settle.world,
+            ..s
+        }
+        .finish();
+        let w = s.wi;
         store3([w.x, w.y, w.z], &mut self.wi, i);
         let v = lanes.weight * s.value;
         store3([v.r, v.g, v.b], &mut self.value, i);
