@@ -9,6 +9,7 @@ pub mod error;
 pub mod ffi;
 pub mod fresnel;
 pub mod json;
+pub mod kernels;
 pub mod lobes;
 pub mod math;
 pub mod microfacet;

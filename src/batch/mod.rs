@@ -15,16 +15,18 @@
 
 mod stage;
 
-use crate::closure::{Closure, ONE_MINUS_EPSILON, SampleResult, sample_weight};
+use crate::closure::{Closure, SampleResult};
 use crate::error::{Error, Status};
-use crate::lobes::flags;
+use crate::kernels::{
+    AlbedoJob, ClosureRows, Directions, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob,
+    LobeLanes, SampleJob, mixture,
+};
+use crate::lobes::Sample;
 use crate::math::{Rgb, Vec3};
 use crate::simd::Kernels;
-use crate::simd::kernels::{
-    AlbedoJob, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob, SampleJob,
-};
 use stage::{Randoms, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch};
 use std::fmt;
+use std::ops::Range;
 
 /// Lanes per work item: a group's staged arrays stay in the L2 cache.
 pub const BLOCK: usize = 4096;
@@ -351,7 +353,8 @@ impl SplitLanes for EvalBlockOutput<'_> {
     }
 }
 
-/// Eval the block starting at lane `start`.
+/// Eval the block starting at lane `start`: in place, chunk by chunk, when every
+/// lane shares one closure that runs in place, else through staging.
 fn eval_block<'a, C: ClosureSource<'a>>(
     kernels: Kernels,
     input: &BatchInput<'a, C>,
@@ -361,14 +364,147 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     out: &mut EvalBlockOutput<'_>,
 ) -> Result<(), Error> {
     let end = (start + BLOCK).min(input.count);
-    s.groups.build(input, start..end, None)?;
+    let Some(closure) = in_place(input) else {
+        return eval_staged(kernels, input, wi, start..end, start, s, out);
+    };
+    in_chunks(start..end, |chunk| {
+        if eval_in_place(kernels, closure, input.wo, wi, chunk.clone(), start, out) {
+            Ok(())
+        } else {
+            eval_staged(kernels, input, wi, chunk, start, s, out)
+        }
+    })
+}
+
+/// Lanes of an in-place chunk: each lobe of the closure passes over the chunk while
+/// its outputs are in the L1 cache.
+const CHUNK: usize = 256;
+
+/// The closure every lane shares, when the block can run in place: no active mask,
+/// a finished closure whose lobes all have SIMD kernels.
+fn in_place<'a, C: ClosureSource<'a>>(input: &BatchInput<'a, C>) -> Option<&'a Closure> {
+    if input.active.is_some() || !input.closures.is_shared() {
+        return None;
+    }
+    let c = input.closures.closure(0).ok()?;
+    (c.is_finished() && c.lobes().iter().all(|l| l.lobe.has_kernels())).then_some(c)
+}
+
+/// Run `chunk` on every chunk of `range`; every chunk runs, the first error wins.
+fn in_chunks(
+    range: Range<usize>,
+    mut chunk: impl FnMut(Range<usize>) -> Result<(), Error>,
+) -> Result<(), Error> {
+    let mut result = Ok(());
+    for lo in range.clone().step_by(CHUNK) {
+        let r = chunk(lo..(lo + CHUNK).min(range.end));
+        if result.is_ok() {
+            result = r;
+        }
+    }
+    result
+}
+
+/// Lanes `lanes` of the caller's rows.
+fn rows<'r>(v: Soa3<'r>, lanes: &Range<usize>) -> [&'r [f32]; 3] {
+    [v.x, v.y, v.z].map(|row| &row[lanes.clone()])
+}
+
+/// Lanes `lanes` of mutable output rows.
+fn rows_mut<'r>(v: &'r mut Soa3Mut<'_>, lanes: &Range<usize>) -> [&'r mut [f32]; 3] {
+    [
+        &mut v.x[lanes.clone()],
+        &mut v.y[lanes.clone()],
+        &mut v.z[lanes.clone()],
+    ]
+}
+
+/// Lobe `k` of a closure shared by every lane.
+fn uniform_lobe(closure: &Closure, k: usize) -> LobeLanes<'_> {
+    let l = &closure.lobes()[k];
+    LobeLanes::Uniform {
+        params: closure.lobe_params(k),
+        frame: l.frame,
+        weight: l.weight,
+        probability: l.probability,
+    }
+}
+
+/// Eval lanes `lanes` in place: the kernels read the caller's directions and write
+/// `out` (whose lane 0 is lane `base`). False when some direction needs the staged
+/// path's exact normalization or error (the outputs are then incomplete).
+fn eval_in_place(
+    kernels: Kernels,
+    closure: &Closure,
+    wo: Soa3<'_>,
+    wi: Soa3<'_>,
+    lanes: Range<usize>,
+    base: usize,
+    out: &mut EvalBlockOutput<'_>,
+) -> bool {
+    let local = lanes.start - base..lanes.end - base;
+    if closure.lobes().is_empty() {
+        if let Some(v) = out.value.as_mut() {
+            for row in rows_mut(v, &local) {
+                row.fill(0.0);
+            }
+        }
+        out.pdf[local.clone()].fill(0.0);
+        if let Some(rev) = out.pdf_reverse.as_deref_mut() {
+            rev[local].fill(0.0);
+        }
+        return true;
+    }
+    for (k, l) in closure.lobes().iter().enumerate() {
+        let (wo, wi) = (rows(wo, &lanes), rows(wi, &lanes));
+        let mut job = EvalJob {
+            len: lanes.len(),
+            mode: closure.transport(),
+            directions: Directions::Raw,
+            wo,
+            wi,
+            lobe: uniform_lobe(closure, k),
+            store: k == 0,
+            value: out.value.as_mut().map(|v| rows_mut(v, &local)),
+            pdf: &mut out.pdf[local.clone()],
+            out_of_range: false,
+        };
+        l.lobe.eval_lanes(kernels, &mut job);
+        if job.out_of_range {
+            return false;
+        }
+        if let Some(rev) = out.pdf_reverse.as_deref_mut() {
+            let mut job = EvalJob {
+                wo: wi,
+                wi: wo,
+                value: None,
+                pdf: &mut rev[local.clone()],
+                ..job
+            };
+            l.lobe.eval_lanes(kernels, &mut job);
+        }
+    }
+    true
+}
+
+/// Eval lanes `range` through grouping and staging; `out`'s lane 0 is lane `base`.
+fn eval_staged<'a, C: ClosureSource<'a>>(
+    kernels: Kernels,
+    input: &BatchInput<'a, C>,
+    wi: Soa3<'_>,
+    range: Range<usize>,
+    base: usize,
+    s: &mut Scratch,
+    out: &mut EvalBlockOutput<'_>,
+) -> Result<(), Error> {
+    s.groups.build(input, range, None)?;
     for g in 0..s.groups.groups().len() {
         let (len, closure) = begin_group(input, s, g)?;
         stage_input(kernels, input, s, g, len, Some(wi));
         let (value, reverse) = (out.value.is_some(), out.pdf_reverse.is_some());
-        eval_lobes(kernels, input, s, g, closure, value, reverse);
+        eval_lobes(kernels, input, s, g, closure, None, value, reverse);
         let group = &s.groups.groups()[g];
-        let scatter = Scatter::new(&group.lanes, start, &s.failed, s.any_failed);
+        let scatter = Scatter::new(&group.lanes, base, &s.failed, s.any_failed);
         if let Some(v) = out.value.as_mut() {
             scatter.rows(&s.value, [&mut *v.x, &mut *v.y, &mut *v.z]);
         }
@@ -377,7 +513,7 @@ fn eval_block<'a, C: ClosureSource<'a>>(
             scatter.row(&s.pdf_reverse, rev);
         }
     }
-    finish_block(s, start, |lane| {
+    finish_block(s, base, |lane| {
         if let Some(v) = out.value.as_mut() {
             v.set(lane, [0.0; 3]);
         }
@@ -388,15 +524,17 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     })
 }
 
-/// Accumulate every lobe of group `g`'s `closure` at the staged `wo` and `wi`: the
-/// pdf into `s.pdf`, with `want_value` the value into `s.value`, with `want_reverse`
-/// the pdf of `wi` to `wo` into `s.pdf_reverse`.
+/// Accumulate every lobe of group `g`'s `closure` but `skip` at the staged `wo` and
+/// `wi`: the pdf into `s.pdf`, with `want_value` the value into `s.value`, with
+/// `want_reverse` the pdf of `wi` to `wo` into `s.pdf_reverse`.
+#[allow(clippy::too_many_arguments)]
 fn eval_lobes<'a, C: ClosureSource<'a>>(
     kernels: Kernels,
     input: &BatchInput<'a, C>,
     s: &mut Scratch,
     g: usize,
     closure: &Closure,
+    skip: Option<usize>,
     want_value: bool,
     want_reverse: bool,
 ) {
@@ -413,27 +551,31 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
     let group = &groups.groups()[g];
     let len = padded(group.lanes.len());
     for (k, l) in closure.lobes().iter().enumerate() {
+        if skip == Some(k) {
+            continue;
+        }
         let lanes = lobe.lanes(input, group, k, len);
         let [vr, vg, vb] = &mut *value;
         let mut job = EvalJob {
             len,
             mode: closure.transport(),
+            directions: Directions::Unit,
             wo: view3(wo, len),
             wi: view3(wi, len),
             lobe: lanes,
+            store: false,
             value: want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
             pdf: &mut pdf[..len],
+            out_of_range: false,
         };
         l.lobe.eval_lanes(kernels, &mut job);
         if want_reverse {
             let mut job = EvalJob {
-                len,
-                mode: closure.transport(),
                 wo: view3(wi, len),
                 wi: view3(wo, len),
-                lobe: lanes,
                 value: None,
                 pdf: &mut pdf_reverse[..len],
+                ..job
             };
             l.lobe.eval_lanes(kernels, &mut job);
         }
@@ -548,31 +690,91 @@ pub fn albedo<'a, C: ClosureSource<'a>>(
 ) -> Result<(), Error> {
     input.check()?;
     out.check(input.count, "albedo")?;
+    let kernels = exec.kernels;
     run_blocks(exec, input.count, out, |start, mut out| {
         with_scratch(|s| {
             let end = (start + BLOCK).min(input.count);
-            s.groups.build(input, start..end, None)?;
-            for g in 0..s.groups.groups().len() {
-                let (len, closure) = begin_group(input, s, g)?;
-                stage_input(exec.kernels, input, s, g, len, None);
-                let group = &s.groups.groups()[g];
-                for (k, l) in closure.lobes().iter().enumerate() {
-                    let lanes = s.lobe.lanes(input, group, k, len);
-                    let mut job = AlbedoJob {
-                        len,
-                        mode: closure.transport(),
-                        wo: view3(&s.wo, len),
-                        lobe: lanes,
-                        value: rows3(&mut s.value, len),
-                    };
-                    l.lobe.albedo_lanes(exec.kernels, &mut job);
+            let Some(closure) = in_place(input) else {
+                return albedo_staged(kernels, input, start..end, start, s, &mut out);
+            };
+            in_chunks(start..end, |chunk| {
+                if albedo_in_place(kernels, closure, input.wo, chunk.clone(), start, &mut out) {
+                    Ok(())
+                } else {
+                    albedo_staged(kernels, input, chunk, start, s, &mut out)
                 }
-                Scatter::new(&group.lanes, start, &s.failed, s.any_failed)
-                    .rows(&s.value, [&mut *out.x, &mut *out.y, &mut *out.z]);
-            }
-            finish_block(s, start, |lane| out.set(lane, [0.0; 3]))
+            })
         })
     })
+}
+
+/// [`eval_in_place`] for albedo.
+fn albedo_in_place(
+    kernels: Kernels,
+    closure: &Closure,
+    wo: Soa3<'_>,
+    lanes: Range<usize>,
+    base: usize,
+    out: &mut Soa3Mut<'_>,
+) -> bool {
+    let local = lanes.start - base..lanes.end - base;
+    if closure.lobes().is_empty() {
+        for row in rows_mut(out, &local) {
+            row.fill(0.0);
+        }
+        return true;
+    }
+    for (k, l) in closure.lobes().iter().enumerate() {
+        let mut job = AlbedoJob {
+            len: lanes.len(),
+            mode: closure.transport(),
+            directions: Directions::Raw,
+            wo: rows(wo, &lanes),
+            lobe: uniform_lobe(closure, k),
+            store: k == 0,
+            value: rows_mut(out, &local),
+            out_of_range: false,
+        };
+        l.lobe.albedo_lanes(kernels, &mut job);
+        if job.out_of_range {
+            return false;
+        }
+    }
+    true
+}
+
+/// [`eval_staged`] for albedo.
+fn albedo_staged<'a, C: ClosureSource<'a>>(
+    kernels: Kernels,
+    input: &BatchInput<'a, C>,
+    range: Range<usize>,
+    base: usize,
+    s: &mut Scratch,
+    out: &mut Soa3Mut<'_>,
+) -> Result<(), Error> {
+    s.groups.build(input, range, None)?;
+    for g in 0..s.groups.groups().len() {
+        let (len, closure) = begin_group(input, s, g)?;
+        stage_input(kernels, input, s, g, len, None);
+        let group = &s.groups.groups()[g];
+        for (k, l) in closure.lobes().iter().enumerate() {
+            let lanes = s.lobe.lanes(input, group, k, len);
+            let mut job = AlbedoJob {
+                len,
+                mode: closure.transport(),
+                directions: Directions::Unit,
+                wo: view3(&s.wo, len),
+                lobe: lanes,
+                store: false,
+                value: rows3(&mut s.value, len),
+                out_of_range: false,
+            };
+            l.lobe.albedo_lanes(kernels, &mut job);
+        }
+        Scatter::new(&group.lanes, base, &s.failed, s.any_failed)
+            .rows(&s.value, [&mut *out.x, &mut *out.y, &mut *out.z]);
+    }
+    finish_block(s, base, |lane| out.set(lane, [0.0; 3]))
 }
 
 /// Random numbers of [`sample`], one array per dimension.
@@ -674,30 +876,6 @@ impl SampleOutput<'_> {
     }
 }
 
-/// A failed sample as the batch reports it: every output zero, `eta` 1.
-const FAILED: SampleResult = SampleResult {
-    wi: Vec3 {
-        x: 0.0,
-        y: 0.0,
-        z: 0.0,
-    },
-    value: Rgb {
-        r: 0.0,
-        g: 0.0,
-        b: 0.0,
-    },
-    pdf: 0.0,
-    weight: Rgb {
-        r: 0.0,
-        g: 0.0,
-        b: 0.0,
-    },
-    flags: 0,
-    lobe: 0,
-    eta: 1.0,
-    roughness: 0.0,
-};
-
 /// `sample` on every active lane. A lane that cannot scatter is not an error: it
 /// gets `pdf = 0` and zero weight, as `glint_sample` returns `GLINT_NO_SAMPLE`.
 pub fn sample<'a, C: ClosureSource<'a>>(
@@ -726,10 +904,91 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     out: &mut SampleOutput<'_>,
 ) -> Result<(), Error> {
     let end = (start + BLOCK).min(input.count);
+    // In place: a shared closure of one lobe, which every lane chooses.
+    let one_lobe =
+        in_place(input).filter(|c| c.lobes().len() == 1 && c.lobes()[0].probability == 1.0);
+    let Some(closure) = one_lobe else {
+        return sample_staged(kernels, input, u, start..end, start, s, out);
+    };
+    in_chunks(start..end, |chunk| {
+        if sample_in_place(kernels, closure, input.wo, u, chunk.clone(), start, s, out) {
+            Ok(())
+        } else {
+            sample_staged(kernels, input, u, chunk, start, s, out)
+        }
+    })
+}
+
+/// Sample lanes `lanes` of a one-lobe closure in place: the kernel reads the caller's
+/// directions and random numbers and writes every output, the closure's sample
+/// finished in the kernel (`kernels::mixture::finish`). Outputs the caller did not
+/// ask for go to scratch rows. False as [`eval_in_place`].
+#[allow(clippy::too_many_arguments)]
+fn sample_in_place(
+    kernels: Kernels,
+    closure: &Closure,
+    wo: Soa3<'_>,
+    u: SampleRandoms<'_>,
+    lanes: Range<usize>,
+    base: usize,
+    s: &mut Scratch,
+    out: &mut SampleOutput<'_>,
+) -> bool {
+    let local = lanes.start - base..lanes.end - base;
+    let n = lanes.len();
+    let lobe = &closure.lobes()[0].lobe;
+    let [sv_r, sv_g, sv_b] = &mut s.sample_value;
+    let value = match out.value.as_mut() {
+        Some(v) => rows_mut(v, &local),
+        None => [grow(sv_r, n), grow(sv_g, n), grow(sv_b, n)],
+    };
+    let mut job = SampleJob {
+        len: n,
+        mode: closure.transport(),
+        directions: Directions::Raw,
+        wo: rows(wo, &lanes),
+        u: [u.u_lobe, u.u0, u.u1].map(|row| &row[lanes.clone()]),
+        lobe: uniform_lobe(closure, 0),
+        wi: rows_mut(&mut out.wi, &local),
+        value,
+        pdf: &mut out.pdf[local.clone()],
+        eta: match out.eta.as_deref_mut() {
+            Some(e) => &mut e[local.clone()],
+            None => grow(&mut s.eta, n),
+        },
+        roughness: match out.roughness.as_deref_mut() {
+            Some(r) => &mut r[local.clone()],
+            None => grow(&mut s.roughness, n),
+        },
+        events: None,
+        closure: Some(ClosureRows {
+            weight: rows_mut(&mut out.weight, &local),
+            flags: out.flags.as_deref_mut().map(|f| &mut f[local.clone()]),
+            lobe: out.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
+            class: mixture::class_of(lobe.flags()),
+        }),
+        out_of_range: false,
+    };
+    lobe.sample_lanes(kernels, &mut job);
+    !job.out_of_range
+}
+
+/// Sample lanes `range` through grouping (by closure shape and chosen lobe) and
+/// staging; `out`'s lane 0 is lane `base`.
+fn sample_staged<'a, C: ClosureSource<'a>>(
+    kernels: Kernels,
+    input: &BatchInput<'a, C>,
+    u: SampleRandoms<'_>,
+    range: Range<usize>,
+    base: usize,
+    s: &mut Scratch,
+    out: &mut SampleOutput<'_>,
+) -> Result<(), Error> {
+    let start = range.start;
     let randoms = Randoms {
         u: [u.u_lobe, u.u0, u.u1],
     };
-    s.groups.build(input, start..end, Some(randoms))?;
+    s.groups.build(input, range, Some(randoms))?;
     for g in 0..s.groups.groups().len() {
         let (len, closure) = begin_group(input, s, g)?;
         stage_input(kernels, input, s, g, len, None);
@@ -737,17 +996,12 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         let k = group.lobe;
         let lobe = &closure.lobes()[k].lobe;
         // The chosen lobe's random numbers: the rescaled lobe choice, then u0 and u1
-        // clamped into [0, 1) as `Closure::sample` does.
+        // (the kernel clamps them into [0, 1)).
         let [uc, u0, u1] = rows3(&mut s.u, len);
         let n = group.lanes.len();
         for (j, &lane) in group.lanes.iter().enumerate() {
             let lane = lane as usize;
             (uc[j], u0[j], u1[j]) = (s.groups.u_reused[lane - start], u.u0[lane], u.u1[lane]);
-        }
-        for row in [&mut *u0, &mut *u1] {
-            for x in &mut row[..n] {
-                *x = x.clamp(0.0, ONE_MINUS_EPSILON);
-            }
         }
         for row in [uc, u0, u1] {
             row[n..].fill(0.5);
@@ -757,6 +1011,7 @@ fn sample_block<'a, C: ClosureSource<'a>>(
         let mut job = SampleJob {
             len,
             mode: closure.transport(),
+            directions: Directions::Unit,
             wo: view3(&s.wo, len),
             u: view3(&s.u, len),
             lobe: lanes,
@@ -765,78 +1020,67 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             pdf: grow(&mut s.sample_pdf, len),
             eta: grow(&mut s.eta, len),
             roughness: grow(&mut s.roughness, len),
-            events: grow(&mut s.events, len),
+            events: Some(grow(&mut s.events, len)),
+            closure: None,
+            out_of_range: false,
         };
         lobe.sample_lanes(kernels, &mut job);
-        // Value and pdf at the returned world-space `wi`, as `Closure::sample` computes
-        // them (the lobe's local result is off by the frame round trip's rounding).
-        eval_lobes(kernels, input, s, g, closure, true, false);
-        let group = &s.groups.groups()[g];
-        // Final value, pdf, weight and flags, staged in place (the random-number rows
-        // hold the weight), then written back row by row.
-        let lobe_flags = lobe.flags();
-        let n = group.lanes.len();
-        let events = &s.events[..n];
-        let [vr, vg, vb] = &mut s.value;
-        let (vr, vg, vb) = (&mut vr[..n], &mut vg[..n], &mut vb[..n]);
-        let pdf = &mut s.pdf[..n];
-        // Delta samples are not in the mixture eval: the chosen lobe's own value, and its
-        // discrete probability times the lobe's selection probability.
-        for j in (0..n).filter(|&j| events[j] & EVENT_DELTA != 0) {
-            let lane = group.lanes[j] as usize;
-            let c = input.closures.closure(lane).expect("resolved before");
-            (vr[j], vg[j], vb[j]) = (
-                s.sample_value[0][j],
-                s.sample_value[1][j],
-                s.sample_value[2][j],
-            );
-            pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
-        }
-        let [wr, wg, wb] = rows3(&mut s.u, len);
-        let (wr, wg, wb) = (&mut wr[..n], &mut wg[..n], &mut wb[..n]);
-        let sample_flags = &mut grow(&mut s.flags, len)[..n];
-        let lobe_index = &mut grow(&mut s.lobe_index, len)[..n];
-        let failed = &s.failed[..n];
-        let class = lobe_flags & (flags::DIFFUSE | flags::GLOSSY);
-        let mut any_bad = false;
-        for j in 0..n {
-            let e = events[j];
-            let weight = (failed[j] == 0 && e & EVENT_VALID != 0)
-                .then(|| sample_weight(Rgb::new(vr[j], vg[j], vb[j]), pdf[j]))
-                .flatten();
-            let ok = weight.is_some();
-            any_bad |= !ok;
-            [wr[j], wg[j], wb[j]] = weight.unwrap_or(Rgb::zero()).to_array();
-            let side = if e & EVENT_TRANSMITTED != 0 {
-                flags::TRANSMISSION
-            } else {
-                flags::REFLECTION
-            };
-            let class = if e & EVENT_DELTA != 0 {
-                flags::SPECULAR
-            } else {
-                class
-            };
-            sample_flags[j] = if ok { side | class } else { 0 };
-            lobe_index[j] = if ok { k as u32 } else { 0 };
-        }
-        if any_bad {
-            // Failed samples read as all zero (eta 1), as `FAILED`.
-            for j in 0..n {
-                if sample_flags[j] == 0 {
-                    (wr[j], wg[j], wb[j]) = (0.0, 0.0, 0.0);
-                    (vr[j], vg[j], vb[j]) = (0.0, 0.0, 0.0);
-                    for row in s.wi.iter_mut() {
-                        row[j] = 0.0;
-                    }
-                    pdf[j] = 0.0;
-                    s.eta[j] = 1.0;
-                    s.roughness[j] = 0.0;
-                }
+        // The mixture at the sampled direction: the chosen lobe's own value and pdf
+        // (exact at the returned `wi`), the other lobes evaluated there.
+        for (j, &lane) in group.lanes.iter().enumerate() {
+            let c = input
+                .closures
+                .closure(lane as usize)
+                .expect("resolved before");
+            for (value, own) in s.value.iter_mut().zip(&s.sample_value) {
+                value[j] = own[j];
             }
+            s.pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
+        }
+        if closure.lobes().len() > 1 {
+            eval_lobes(kernels, input, s, g, closure, Some(k), true, false);
+        }
+        let group = &s.groups.groups()[g];
+        let class = mixture::class_of(lobe.flags());
+        let [wr, wg, wb] = rows3(&mut s.u, len);
+        let sample_flags = grow(&mut s.flags, len);
+        let lobe_index = grow(&mut s.lobe_index, len);
+        for (j, &lane) in group.lanes.iter().enumerate() {
+            let e = s.events[j];
+            let delta = e & EVENT_DELTA != 0;
+            let sampled = Sample {
+                wi: Vec3::new(s.wi[0][j], s.wi[1][j], s.wi[2][j]),
+                value: Rgb::zero(),
+                pdf: 0.0,
+                valid: s.failed[j] == 0 && e & EVENT_VALID != 0,
+                transmitted: e & EVENT_TRANSMITTED != 0,
+                delta,
+                eta: s.eta[j],
+                roughness: s.roughness[j],
+            };
+            // Delta events are not in the other lobes' eval: the chosen lobe's alone.
+            let (value, pdf) = if delta {
+                let c = input
+                    .closures
+                    .closure(lane as usize)
+                    .expect("resolved before");
+                let own = &s.sample_value;
+                let p_own = c.lobes()[k].probability * s.sample_pdf[j];
+                (Rgb::new(own[0][j], own[1][j], own[2][j]), p_own)
+            } else {
+                let v = &s.value;
+                (Rgb::new(v[0][j], v[1][j], v[2][j]), s.pdf[j])
+            };
+            let c = mixture::finish(&sampled, value, pdf);
+            [wr[j], wg[j], wb[j]] = c.weight.to_array();
+            [s.value[0][j], s.value[1][j], s.value[2][j]] = c.value.to_array();
+            [s.wi[0][j], s.wi[1][j], s.wi[2][j]] = [c.wi.x, c.wi.y, c.wi.z];
+            (s.pdf[j], s.eta[j], s.roughness[j]) = (c.pdf, c.eta, c.roughness);
+            sample_flags[j] = mixture::flags(&c, class)[0];
+            lobe_index[j] = if c.ok { k as u32 } else { 0 };
         }
         let (sample_flags, lobe_index) = (&s.flags, &s.lobe_index);
-        let scatter = Scatter::new(&group.lanes, start, &s.failed, false);
+        let scatter = Scatter::new(&group.lanes, base, &s.failed, false);
         scatter.rows(&s.wi, [&mut *out.wi.x, &mut *out.wi.y, &mut *out.wi.z]);
         scatter.row(&s.pdf, out.pdf);
         scatter.rows(
@@ -859,5 +1103,5 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             scatter.row(&s.roughness, r);
         }
     }
-    finish_block(s, start, |lane| out.write(lane, &FAILED))
+    finish_block(s, base, |lane| out.write(lane, &SampleResult::FAILED))
 }

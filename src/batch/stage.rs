@@ -7,9 +7,9 @@
 use super::{BatchInput, ClosureSource, Soa3};
 use crate::closure::{Closure, ONE_MINUS_EPSILON, check_randoms};
 use crate::error::{Error, Status};
+use crate::kernels::{LANE_MULTIPLE, LobeLanes, normalize};
 use crate::math::Vec3;
 use crate::simd::Kernels;
-use crate::simd::kernels::{LANE_MULTIPLE, LobeLanes, normalize};
 use std::cell::RefCell;
 use std::ops::Range;
 

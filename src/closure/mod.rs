@@ -11,6 +11,7 @@ mod arena;
 pub use arena::Arena;
 
 use crate::error::{Error, Status};
+use crate::kernels::mixture;
 use crate::lobes::Transport;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params;
@@ -75,6 +76,33 @@ pub struct SampleResult {
     pub lobe: u32,
     pub eta: f32,
     pub roughness: f32,
+}
+
+impl SampleResult {
+    /// A failed sample as batches report it: every output zero, `eta` 1, as
+    /// `kernels::mixture::finish` leaves failed lanes.
+    pub const FAILED: SampleResult = SampleResult {
+        wi: Vec3 {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        },
+        value: Rgb {
+            r: 0.0,
+            g: 0.0,
+            b: 0.0,
+        },
+        pdf: 0.0,
+        weight: Rgb {
+            r: 0.0,
+            g: 0.0,
+            b: 0.0,
+        },
+        flags: 0,
+        lobe: 0,
+        eta: 1.0,
+        roughness: 0.0,
+    };
 }
 
 /// A weighted set of lobes.
@@ -363,28 +391,13 @@ impl Closure {
     }
 
     /// The lobe `u_lobe` selects and `u_lobe` rescaled to [0, 1) within its bin, or
-    /// `None` when no lobe can be chosen.
+    /// `None` when no lobe can be chosen ([`mixture::choose`]).
     pub(crate) fn choose_lobe(&self, u_lobe: f32) -> Option<(usize, f32)> {
-        let u_lobe = u_lobe.clamp(0.0, ONE_MINUS_EPSILON);
-        let mut start = 0.0;
-        let mut chosen = self.lobe_count;
-        for (k, l) in self.lobes().iter().enumerate() {
-            if l.probability > 0.0 && u_lobe < start + l.probability {
-                chosen = k;
-                break;
-            }
-            start += l.probability;
+        let mut probabilities = [0.0f32; MAX_LOBES];
+        for (p, l) in probabilities.iter_mut().zip(self.lobes()) {
+            *p = l.probability;
         }
-        if chosen == self.lobe_count {
-            // Round-off left u_lobe past the last bin: take the last lobe that can be chosen.
-            chosen = self.lobes().iter().rposition(|l| l.probability > 0.0)?;
-            start = 1.0 - self.lobes[chosen].probability;
-        }
-        let probability = self.lobes[chosen].probability;
-        Some((
-            chosen,
-            ((u_lobe - start) / probability).clamp(0.0, ONE_MINUS_EPSILON),
-        ))
+        mixture::choose(&probabilities[..self.lobe_count], u_lobe).map(|(k, u)| (k as usize, u))
     }
 
     /// Sample lobe `index` alone: value is `weight * f |cos|`, pdf that lobe's own.
@@ -432,13 +445,16 @@ impl Closure {
             }),
             None => own,
         };
-        let weight = sample_weight(value, pdf).ok_or_else(no_sample)?;
+        let c = mixture::finish(&s, value, pdf);
+        if !c.ok {
+            return Err(no_sample());
+        }
         Ok(SampleResult {
             wi,
             value,
             pdf,
-            weight,
-            flags: s.flags(l.lobe.flags()),
+            weight: c.weight,
+            flags: mixture::flags(&c, mixture::class_of(l.lobe.flags()))[0],
             lobe: k as u32,
             eta: s.eta,
             roughness: s.roughness,
@@ -495,28 +511,11 @@ fn normalize_shares(shares: &[f32]) -> [f32; MAX_LOBES] {
     p
 }
 
-/// A sample's weight, `value / pdf` (one division per channel, never `value * (1 /
-/// pdf)`, which overflows for denormal pdfs), computed here for the scalar and batch
-/// calls alike; `None` (no sample) when the pdf is not a positive finite number or a
-/// channel of the weight is not finite.
-pub(crate) fn sample_weight(value: Rgb<f32>, pdf: f32) -> Option<Rgb<f32>> {
-    if !(pdf > 0.0 && pdf.is_finite()) {
-        return None;
-    }
-    let weight = value.map(|v| v / pdf);
-    weight
-        .to_array()
-        .iter()
-        .all(|w| w.is_finite())
-        .then_some(weight)
-}
-
-/// The largest `f32` below 1, so that `u < 1` for every sample dimension.
-pub(crate) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+pub(crate) use mixture::ONE_MINUS_EPSILON;
 
 /// Random numbers clamped into [0, 1), as every sampling routine expects.
 pub(crate) fn clamp_randoms(u: [f32; 3]) -> [f32; 3] {
-    u.map(|x| x.clamp(0.0, ONE_MINUS_EPSILON))
+    u.map(mixture::clamp_random)
 }
 
 /// Random numbers must be finite (they are clamped into [0, 1)).
@@ -549,15 +548,5 @@ mod tests {
         assert!((p[0] - expected).abs() <= 1e-6 && p[0] == p[1], "{p:?}");
         assert_eq!(p[2], 0.0);
         assert!((p[..4].iter().sum::<f32>() - 1.0).abs() <= 1e-6, "{p:?}");
-    }
-
-    #[test]
-    fn weights_divide_and_non_finite_weights_are_no_sample() {
-        let v = Rgb::new(3e-45, 0.0, 6e-45);
-        let w = sample_weight(v, 3e-45).unwrap();
-        assert_eq!(w.to_array(), [1.0, 0.0, 2.0]);
-        assert_eq!(sample_weight(Rgb::new(1e30, 0.0, 0.0), 1e-30), None);
-        assert_eq!(sample_weight(v, 0.0), None);
-        assert_eq!(sample_weight(v, f32::INFINITY), None);
     }
 }

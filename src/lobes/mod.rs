@@ -17,10 +17,10 @@ pub mod fresnel_params;
 pub mod lambert;
 pub mod mirror;
 
+use crate::kernels::{self, AlbedoJob, EvalJob, SampleJob};
 use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::params::ParamSpec;
 use crate::simd::Kernels;
-use crate::simd::kernels::{self, AlbedoJob, EvalJob, SampleJob};
 use std::marker::PhantomData;
 
 /// Sample and lobe flags (bit set), as in the C API's `GLINT_FLAG_*`.
@@ -350,9 +350,17 @@ pub trait LobeType: Send + Sync {
     fn eval_lanes(&self, _kernels: Kernels, job: &mut EvalJob<'_>) {
         kernels::eval_each_lane(job, |d, wo, wi, mode| self.eval_decoded(d, wo, wi, mode));
     }
-    /// `sample` over a group of lanes; the default loops over [`LobeType::sample_decoded`].
+    /// `sample` over a group of lanes; the default loops over [`LobeType::sample_world`].
     fn sample_lanes(&self, _kernels: Kernels, job: &mut SampleJob<'_>) {
-        kernels::sample_each_lane(job, |d, wo, u, mode| self.sample_decoded(d, wo, u, mode));
+        kernels::sample_each_lane(job, |d, frame, wo, u, mode| {
+            self.sample_world(d, frame, wo, u, mode)
+        });
+    }
+    /// Whether the `*_lanes` calls take jobs over the caller's own arrays
+    /// (`kernels::Directions::Raw`, any length, one-lobe closure samples finished in
+    /// the kernel). Lobes without SIMD kernels get staged jobs only.
+    fn has_kernels(&self) -> bool {
+        false
     }
     /// `albedo` over a group of lanes; the default loops over [`LobeType::albedo_decoded`].
     fn albedo_lanes(&self, _kernels: Kernels, job: &mut AlbedoJob<'_>) {
@@ -466,6 +474,9 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn albedo_tolerance(&self, params: &[f32]) -> f32 {
         M::albedo_tolerance(params)
+    }
+    fn has_kernels(&self) -> bool {
+        true
     }
     fn eval_lanes(&self, kernels: Kernels, job: &mut EvalJob<'_>) {
         kernels::eval::<M>(kernels, job);

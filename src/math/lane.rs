@@ -8,6 +8,9 @@
 
 use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
+/// Most lanes of any lane type (AVX-512's 16).
+pub const MAX_LANES: usize = 16;
+
 /// A per-lane boolean.
 pub trait Mask: Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self> {
     fn splat(value: bool) -> Self;
@@ -43,6 +46,21 @@ pub trait Lane:
     fn load(src: &[f32]) -> Self;
     /// Write the lanes to the first `LANES` values of `dst`.
     fn store(self, dst: &mut [f32]);
+    /// The first `n < LANES` values of `src` and `fill` in the other lanes (a masked
+    /// tail: nothing past `src[n - 1]` is read).
+    #[inline(always)]
+    fn load_tail(src: &[f32], n: usize, fill: f32) -> Self {
+        let mut lanes = [fill; MAX_LANES];
+        lanes[..n].copy_from_slice(&src[..n]);
+        Self::load(&lanes)
+    }
+    /// Write the first `n < LANES` lanes to `dst[..n]` (nothing else is written).
+    #[inline(always)]
+    fn store_tail(self, dst: &mut [f32], n: usize) {
+        let mut lanes = [0.0; MAX_LANES];
+        self.store(&mut lanes);
+        dst[..n].copy_from_slice(&lanes[..n]);
+    }
     fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
 
     fn lt(self, other: Self) -> Self::Mask;

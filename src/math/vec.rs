@@ -115,6 +115,10 @@ impl<L: Lane> Rgb<L> {
         Self::splat(L::zero())
     }
     #[inline(always)]
+    pub fn to_array(self) -> [L; 3] {
+        [self.r, self.g, self.b]
+    }
+    #[inline(always)]
     pub fn from_array(c: [L; 3]) -> Self {
         Self::new(c[0], c[1], c[2])
     }
@@ -173,12 +177,6 @@ impl<L: Lane> Mul<L> for Rgb<L> {
             #[inline(always)]
             |a| a * s,
         )
-    }
-}
-
-impl Rgb<f32> {
-    pub fn to_array(self) -> [f32; 3] {
-        [self.r, self.g, self.b]
     }
 }
 

@@ -24,12 +24,12 @@ pub mod abi;
 mod intern;
 
 use crate::error::{Error, Status};
+use crate::kernels::{self, EvalJob};
 use crate::lobes::{Eval, LobeType, Sample, Transport, VerifyCase, flags};
 use crate::math::{Rgb, Vec3};
 use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::{LobeRef, Registry};
 use crate::simd::Kernels;
-use crate::simd::kernels::{self, EvalJob};
 use intern::{intern, intern_str};
 use std::ffi::{CStr, c_char, c_void};
 use std::mem::MaybeUninit;

@@ -1,8 +1,10 @@
-//! SIMD kernels and their run-time dispatch.
+//! SIMD lane types and the run-time dispatch of kernels: this module holds the lane
+//! types and the dispatch token ([`Kernels`]) only; the kernels themselves, generic
+//! over [`Lane`], live in `crate::kernels` and `crate::math`.
 //!
 //! Mechanism: `core::arch` intrinsics behind the crate's own [`Lane`] trait. Each ISA
 //! has one lane type (`avx2::F32x8`, `avx512::F32x16`) implementing `Lane` with
-//! `#[inline(always)]` methods; the generic kernels in [`kernels`] are instantiated
+//! `#[inline(always)]` methods; the generic kernels (`crate::kernels`) are instantiated
 //! once per ISA inside a `#[target_feature]` entry point, so every lobe's single
 //! generic source is compiled to scalar, AVX2+FMA and AVX-512 code in the same
 //! baseline x86-64 binary. We chose this over `pulp` or `fearless_simd` because the
@@ -12,7 +14,8 @@
 //!
 //! Soundness: a SIMD lane type must only run on a CPU with its features. The only
 //! way to reach a kernel is through a [`Kernels`] value, whose constructor checks
-//! the CPU at run time; everything else in this module is private.
+//! the CPU at run time. The lane types are crate-private and named only by the
+//! `kernel!` macro's `#[target_feature]` entry points.
 
 use crate::error::{Error, Status};
 use crate::math::Lane;
@@ -20,15 +23,15 @@ use crate::math::Lane;
 /// A public kernel that runs `$body` with the lane type of its `Kernels`: the
 /// target-feature entry points are the only place SIMD code is entered.
 macro_rules! kernel {
-    ($(#[$doc:meta])* $name:ident <$($m:ident)?> ($($arg:ident: $ty:ty),*) $(-> $ret:ty)? => $body:ident) => {
+    ($(#[$doc:meta])* $name:ident <$($m:ident: $bound:path)?> ($($arg:ident: $ty:ty),*) $(-> $ret:ty)? => $body:ident) => {
         $(#[$doc])*
-        pub fn $name<$($m: crate::lobes::Model)?>(kernels: Kernels, $($arg: $ty),*) $(-> $ret)? {
+        pub fn $name<$($m: $bound)?>(kernels: $crate::simd::Kernels, $($arg: $ty),*) $(-> $ret)? {
             match kernels.isa() {
                 $crate::simd::Isa::Scalar => $body::<$($m,)? f32>($($arg),*),
                 #[cfg(target_arch = "x86_64")]
                 $crate::simd::Isa::Avx2 => {
                     #[target_feature(enable = "avx2,fma")]
-                    fn run<$($m: crate::lobes::Model)?>($($arg: $ty),*) $(-> $ret)? {
+                    fn run<$($m: $bound)?>($($arg: $ty),*) $(-> $ret)? {
                         $body::<$($m,)? $crate::simd::avx2::F32x8>($($arg),*)
                     }
                     // SAFETY: `kernels` proves this CPU has AVX2 and FMA.
@@ -37,7 +40,7 @@ macro_rules! kernel {
                 #[cfg(target_arch = "x86_64")]
                 $crate::simd::Isa::Avx512 => {
                     #[target_feature(enable = "avx512f")]
-                    fn run<$($m: crate::lobes::Model)?>($($arg: $ty),*) $(-> $ret)? {
+                    fn run<$($m: $bound)?>($($arg: $ty),*) $(-> $ret)? {
                         $body::<$($m,)? $crate::simd::avx512::F32x16>($($arg),*)
                     }
                     // SAFETY: `kernels` proves this CPU has AVX-512F.
@@ -51,10 +54,12 @@ macro_rules! kernel {
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx2;
+#[doc(hidden)]
+pub(crate) mod avx2;
 #[cfg(target_arch = "x86_64")]
-mod avx512;
-pub mod kernels;
+#[doc(hidden)]
+pub(crate) mod avx512;
+pub(crate) use kernel;
 
 /// Call `core::arch` intrinsics from a lane method.
 macro_rules! intrinsic {

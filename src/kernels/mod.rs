@@ -1,0 +1,553 @@
+//! The batch kernels, written once over [`Lane`] and instantiated per ISA by
+//! `crate::simd::kernel!`.
+//!
+//! A kernel runs one lobe over SoA rows of lanes: it moves directions into the
+//! lobe's frame, calls the lobe's generic `eval`, `sample` or `albedo`, and stores
+//! or accumulates `weight * value` and `probability * pdf`. The rows are either the
+//! caller's own arrays (one closure shared by every lane: any length, the last
+//! register a masked tail, directions normalized in the kernel, results written in
+//! place) or rows `crate::batch` staged (unit directions, padded to whole
+//! registers). Lobe parameters are decoded blocks (`LobeType::decode`), read once per
+//! job when every lane shares the closure, once per register otherwise. The closure
+//! mixture over lanes (lobe choice, the sample's weight and flags) is in [`mixture`].
+
+pub mod mixture;
+
+use crate::lobes::{Model, Params, Sample, ToWorld, Transport};
+use crate::math::lane::MAX_LANES;
+use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3};
+use crate::simd::kernel;
+
+/// Most parameter values one lobe type may have to run in the SIMD kernels.
+pub const MAX_LOBE_PARAMS: usize = 64;
+
+/// Lanes every staged row is padded to a multiple of (the widest register).
+pub const LANE_MULTIPLE: usize = MAX_LANES;
+
+/// `SampleJob::events` bits.
+pub const EVENT_VALID: u8 = 1;
+pub const EVENT_TRANSMITTED: u8 = 2;
+pub const EVENT_DELTA: u8 = 4;
+
+/// One lobe of the closures of a group of lanes.
+#[derive(Clone, Copy)]
+pub enum LobeLanes<'a> {
+    /// Every lane has the same closure.
+    Uniform {
+        params: &'a [f32],
+        frame: Frame,
+        weight: Rgb<f32>,
+        probability: f32,
+    },
+    /// SoA rows of `stride` values: `params` has `param_count` rows, `frame` nine
+    /// (t, b, n, each x, y, z), `weight` three, `probability` one.
+    PerLane {
+        params: &'a [f32],
+        param_count: usize,
+        frame: &'a [f32],
+        weight: &'a [f32],
+        probability: &'a [f32],
+        stride: usize,
+    },
+}
+
+/// How a job's directions arrive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Directions {
+    /// Unit vectors (staged by the batch layer).
+    Unit,
+    /// The caller's vectors: the kernel normalizes them by `Vec3::try_unit`'s rule for
+    /// squared lengths in [1e-24, 1e24] and sets the job's `out_of_range` when a lane
+    /// is outside it (or not finite). Such a job's outputs are not valid: the batch
+    /// layer computes its lanes again through staging, which handles every length.
+    Raw,
+}
+
+/// Inputs of an eval or pdf job.
+pub struct EvalJob<'a> {
+    /// Lanes to compute: any count for [`LobeLanes::Uniform`], a multiple of
+    /// [`LANE_MULTIPLE`] for [`LobeLanes::PerLane`].
+    pub len: usize,
+    pub mode: Transport,
+    pub directions: Directions,
+    pub wo: [&'a [f32]; 3],
+    pub wi: [&'a [f32]; 3],
+    pub lobe: LobeLanes<'a>,
+    /// Overwrite the outputs (the closure's first lobe) rather than add to them.
+    pub store: bool,
+    /// `weight * f |cos theta_i|`, when wanted.
+    pub value: Option<[&'a mut [f32]; 3]>,
+    /// `probability * pdf`.
+    pub pdf: &'a mut [f32],
+    /// See [`Directions::Raw`].
+    pub out_of_range: bool,
+}
+
+/// A sampling job: every lane samples this lobe. Outputs are overwritten.
+pub struct SampleJob<'a> {
+    pub len: usize,
+    pub mode: Transport,
+    pub directions: Directions,
+    pub wo: [&'a [f32]; 3],
+    /// Event choice (already rescaled for this lobe) and the two direction
+    /// dimensions; clamped into [0, 1) here. Not finite: `out_of_range`.
+    pub u: [&'a [f32]; 3],
+    pub lobe: LobeLanes<'a>,
+    /// World-space unit direction.
+    pub wi: [&'a mut [f32]; 3],
+    /// `weight * value`.
+    pub value: [&'a mut [f32]; 3],
+    /// The lobe's own pdf (or discrete probability for delta events).
+    pub pdf: &'a mut [f32],
+    pub eta: &'a mut [f32],
+    pub roughness: &'a mut [f32],
+    /// `EVENT_*` bits (staged jobs), or `None` when `closure` finishes the sample.
+    pub events: Option<&'a mut [u8]>,
+    /// The closure's sample, when this lobe is the closure's only one (probability
+    /// 1): weight, flags and lobe index written here, failed lanes zeroed
+    /// ([`mixture::finish`]).
+    pub closure: Option<ClosureRows<'a>>,
+    pub out_of_range: bool,
+}
+
+/// The outputs of a one-lobe closure's sample besides the lobe's own.
+pub struct ClosureRows<'a> {
+    pub weight: [&'a mut [f32]; 3],
+    pub flags: Option<&'a mut [u32]>,
+    pub lobe: Option<&'a mut [u32]>,
+    /// The lobe type's `DIFFUSE` / `GLOSSY` flags.
+    pub class: u32,
+}
+
+/// An albedo job.
+pub struct AlbedoJob<'a> {
+    pub len: usize,
+    pub mode: Transport,
+    pub directions: Directions,
+    pub wo: [&'a [f32]; 3],
+    pub lobe: LobeLanes<'a>,
+    pub store: bool,
+    /// `weight * albedo`.
+    pub value: [&'a mut [f32]; 3],
+    pub out_of_range: bool,
+}
+
+/// A lobe instance's per-lane data, loaded or splatted.
+struct LaneLobe<L> {
+    frame: LaneFrame<L>,
+    weight: Rgb<L>,
+    probability: L,
+}
+
+/// Register `i` of `row`: `L::LANES` values, or the first `n` and `fill`.
+#[inline(always)]
+fn load<L: Lane>(row: &[f32], i: usize, n: usize, fill: f32) -> L {
+    if n == L::LANES {
+        L::load(&row[i..])
+    } else {
+        L::load_tail(&row[i..], n, fill)
+    }
+}
+
+#[inline(always)]
+fn store<L: Lane>(v: L, row: &mut [f32], i: usize, n: usize) {
+    if n == L::LANES {
+        v.store(&mut row[i..]);
+    } else {
+        v.store_tail(&mut row[i..], n);
+    }
+}
+
+/// `row[i..] = v`, or `+= v` unless `overwrite`.
+#[inline(always)]
+fn put<L: Lane>(v: L, row: &mut [f32], i: usize, n: usize, overwrite: bool) {
+    let v = if overwrite {
+        v
+    } else {
+        load::<L>(row, i, n, 0.0) + v
+    };
+    store(v, row, i, n);
+}
+
+/// A direction register; tail lanes hold +z.
+#[inline(always)]
+fn load3<L: Lane>(rows: [&[f32]; 3], i: usize, n: usize) -> Vec3<L> {
+    Vec3::new(
+        load(rows[0], i, n, 0.0),
+        load(rows[1], i, n, 0.0),
+        load(rows[2], i, n, 1.0),
+    )
+}
+
+/// `d` normalized by `Vec3::try_unit`'s rule for squared lengths in [1e-24, 1e24],
+/// and the lanes in that range.
+#[inline(always)]
+fn unit_in_range<L: Lane>(d: Vec3<L>) -> (Vec3<L>, L::Mask) {
+    let len2 = d.length_squared();
+    let ok = len2.ge(L::splat(1e-24)) & len2.le(L::splat(1e24));
+    (d * (L::one() / len2.sqrt()), ok)
+}
+
+/// A job's direction register, normalized when the job's directions are raw;
+/// `out_of_range` is set when a lane cannot be.
+#[inline(always)]
+fn direction<L: Lane>(
+    rows: [&[f32]; 3],
+    i: usize,
+    n: usize,
+    directions: Directions,
+    out_of_range: &mut bool,
+) -> Vec3<L> {
+    let d = load3(rows, i, n);
+    match directions {
+        Directions::Unit => d,
+        Directions::Raw => {
+            let (unit, ok) = unit_in_range(d);
+            *out_of_range |= !ok.all();
+            unit
+        }
+    }
+}
+
+/// Frame axis `axis` (rows `3 axis .. 3 axis + 2` of `stride` values) at lane `i`.
+#[inline(always)]
+fn load_row3<L: Lane>(frame: &[f32], stride: usize, axis: usize, i: usize) -> Vec3<L> {
+    let row = 3 * axis * stride + i;
+    Vec3::new(
+        L::load(&frame[row..]),
+        L::load(&frame[row + stride..]),
+        L::load(&frame[row + 2 * stride..]),
+    )
+}
+
+/// The work of a kernel on one register of `n` lanes at `i`. A trait rather than a
+/// closure: closures are separate functions that LLVM may leave un-inlined, and
+/// outside the `#[target_feature]` entry point the intrinsics inside them become calls.
+trait RegisterOp<M: Model, L: Lane> {
+    fn run(&mut self, i: usize, n: usize, p: &M::Prepared<L>, lanes: &LaneLobe<L>);
+}
+
+/// Run `op` on every register of lanes of a job of `len` lanes.
+#[inline(always)]
+fn for_each_register<M: Model, L: Lane>(
+    lobe: LobeLanes<'_>,
+    len: usize,
+    op: &mut impl RegisterOp<M, L>,
+) {
+    let mut raw = [L::zero(); MAX_LOBE_PARAMS];
+    match lobe {
+        LobeLanes::Uniform {
+            params,
+            frame,
+            weight,
+            probability,
+        } => {
+            for (r, &p) in raw.iter_mut().zip(params) {
+                *r = L::splat(p);
+            }
+            let prepared = M::prepare(Params::new(&raw[..params.len()]));
+            let lanes = LaneLobe {
+                frame: LaneFrame::splat(&frame),
+                weight: Rgb::new(L::splat(weight.r), L::splat(weight.g), L::splat(weight.b)),
+                probability: L::splat(probability),
+            };
+            for i in (0..len).step_by(L::LANES) {
+                op.run(i, L::LANES.min(len - i), &prepared, &lanes);
+            }
+        }
+        LobeLanes::PerLane {
+            params,
+            param_count,
+            frame,
+            weight,
+            probability,
+            stride,
+        } => {
+            for i in (0..len).step_by(L::LANES) {
+                for (p, r) in raw[..param_count].iter_mut().enumerate() {
+                    *r = L::load(&params[p * stride + i..]);
+                }
+                let prepared = M::prepare(Params::new(&raw[..param_count]));
+                let lanes = LaneLobe {
+                    frame: LaneFrame {
+                        t: load_row3(frame, stride, 0, i),
+                        b: load_row3(frame, stride, 1, i),
+                        n: load_row3(frame, stride, 2, i),
+                    },
+                    weight: Rgb::new(
+                        L::load(&weight[i..]),
+                        L::load(&weight[stride + i..]),
+                        L::load(&weight[2 * stride + i..]),
+                    ),
+                    probability: L::load(&probability[i..]),
+                };
+                op.run(i, L::LANES, &prepared, &lanes);
+            }
+        }
+    }
+}
+
+impl<M: Model, L: Lane> RegisterOp<M, L> for EvalJob<'_> {
+    #[inline(always)]
+    fn run(&mut self, i: usize, n: usize, p: &M::Prepared<L>, lanes: &LaneLobe<L>) {
+        let wo = direction(self.wo, i, n, self.directions, &mut self.out_of_range);
+        let wi = direction(self.wi, i, n, self.directions, &mut self.out_of_range);
+        let e = M::eval(
+            p,
+            lanes.frame.to_local(wo),
+            lanes.frame.to_local(wi),
+            self.mode,
+        );
+        if let Some(value) = &mut self.value {
+            let v = lanes.weight * e.value;
+            for (v, row) in v.to_array().into_iter().zip(value.iter_mut()) {
+                put(v, row, i, n, self.store);
+            }
+        }
+        put(lanes.probability * e.pdf, self.pdf, i, n, self.store);
+    }
+}
+
+impl<M: Model, L: Lane> RegisterOp<M, L> for SampleJob<'_> {
+    #[inline(always)]
+    fn run(&mut self, i: usize, n: usize, p: &M::Prepared<L>, lanes: &LaneLobe<L>) {
+        let wo = direction(self.wo, i, n, self.directions, &mut self.out_of_range);
+        let [uc, u0, u1] = self.u.map(|row| load::<L>(row, i, n, 0.5));
+        self.out_of_range |= !(uc.is_finite() & u0.is_finite() & u1.is_finite()).all();
+        let [uc, u0, u1] = [uc, u0, u1].map(mixture::clamp_random);
+        let mut settle = ToWorld::new(lanes.frame);
+        let s = M::sample(
+            p,
+            lanes.frame.to_local(wo),
+            uc,
+            u0,
+            u1,
+            self.mode,
+            &mut settle,
+        );
+        let s = Sample {
+            wi: settle.world,
+            ..s
+        }
+        .finish();
+        let value = lanes.weight * s.value;
+        let (wi, value, pdf, eta, roughness) = match &mut self.closure {
+            None => (s.wi, value, s.pdf, s.eta, s.roughness),
+            Some(rows) => {
+                // The closure's only lobe: its value and pdf are the mixture's.
+                let c = mixture::finish(&s, value, lanes.probability * s.pdf);
+                for (w, row) in c.weight.to_array().into_iter().zip(rows.weight.iter_mut()) {
+                    store(w, row, i, n);
+                }
+                let flags = mixture::flags(&c, rows.class);
+                if let Some(f) = rows.flags.as_deref_mut() {
+                    f[i..i + n].copy_from_slice(&flags[..n]);
+                }
+                if let Some(l) = rows.lobe.as_deref_mut() {
+                    l[i..i + n].fill(0);
+                }
+                (c.wi, c.value, c.pdf, c.eta, c.roughness)
+            }
+        };
+        for (v, row) in [wi.x, wi.y, wi.z].into_iter().zip(self.wi.iter_mut()) {
+            store(v, row, i, n);
+        }
+        for (v, row) in value.to_array().into_iter().zip(self.value.iter_mut()) {
+            store(v, row, i, n);
+        }
+        store(pdf, self.pdf, i, n);
+        store(eta, self.eta, i, n);
+        store(roughness, self.roughness, i, n);
+        if let Some(events) = self.events.as_deref_mut() {
+            let (valid, transmitted, delta) =
+                (s.valid.bits(), s.transmitted.bits(), s.delta.bits());
+            for (j, e) in events[i..i + n].iter_mut().enumerate() {
+                let bit = |m: u32, flag: u8| if m >> j & 1 != 0 { flag } else { 0 };
+                *e = bit(valid, EVENT_VALID)
+                    | bit(transmitted, EVENT_TRANSMITTED)
+                    | bit(delta, EVENT_DELTA);
+            }
+        }
+    }
+}
+
+impl<M: Model, L: Lane> RegisterOp<M, L> for AlbedoJob<'_> {
+    #[inline(always)]
+    fn run(&mut self, i: usize, n: usize, p: &M::Prepared<L>, lanes: &LaneLobe<L>) {
+        let wo = direction(self.wo, i, n, self.directions, &mut self.out_of_range);
+        let v = lanes.weight * M::albedo(p, lanes.frame.to_local(wo), self.mode);
+        for (v, row) in v.to_array().into_iter().zip(self.value.iter_mut()) {
+            put(v, row, i, n, self.store);
+        }
+    }
+}
+
+#[inline(always)]
+fn eval_body<M: Model, L: Lane>(job: &mut EvalJob<'_>) {
+    for_each_register::<M, L>(job.lobe, job.len, job);
+}
+
+#[inline(always)]
+fn sample_body<M: Model, L: Lane>(job: &mut SampleJob<'_>) {
+    for_each_register::<M, L>(job.lobe, job.len, job);
+}
+
+#[inline(always)]
+fn albedo_body<M: Model, L: Lane>(job: &mut AlbedoJob<'_>) {
+    for_each_register::<M, L>(job.lobe, job.len, job);
+}
+
+/// Normalize the staged directions in place; returns whether any lane's squared
+/// length is not a finite number in [1e-24, 1e24] (those lanes are left alone, and
+/// the batch layer re-stages the group exactly).
+#[inline(always)]
+fn normalize_body<L: Lane>(v: &mut [&mut [f32]; 3], len: usize) -> bool {
+    let mut any = false;
+    for i in (0..len).step_by(L::LANES) {
+        let d = load3::<L>([&*v[0], &*v[1], &*v[2]], i, L::LANES);
+        let (unit, ok) = unit_in_range(d);
+        let n = Vec3::select(ok, unit, d);
+        for (c, row) in [n.x, n.y, n.z].into_iter().zip(v.iter_mut()) {
+            c.store(&mut row[i..]);
+        }
+        any |= !ok.all();
+    }
+    any
+}
+
+kernel!(
+    /// `M::eval` over a job's lanes.
+    eval<M: Model>(job: &mut EvalJob<'_>) => eval_body
+);
+kernel!(
+    /// `M::sample` over a job's lanes.
+    sample<M: Model>(job: &mut SampleJob<'_>) => sample_body
+);
+kernel!(
+    /// `M::albedo` over a job's lanes.
+    albedo<M: Model>(job: &mut AlbedoJob<'_>) => albedo_body
+);
+kernel!(
+    /// Normalize `len` staged directions (a multiple of `LANE_MULTIPLE`); true when
+    /// some lane's length is out of the fast path's range.
+    normalize<>(v: &mut [&mut [f32]; 3], len: usize) -> bool => normalize_body
+);
+
+impl LobeLanes<'_> {
+    /// Lane `i`'s parameter block (into `params`), frame, weight and probability.
+    pub(crate) fn lane(&self, i: usize, params: &mut Vec<f32>) -> (Frame, Rgb<f32>, f32) {
+        params.clear();
+        match *self {
+            LobeLanes::Uniform {
+                params: p,
+                frame,
+                weight,
+                probability,
+            } => {
+                params.extend_from_slice(p);
+                (frame, weight, probability)
+            }
+            LobeLanes::PerLane {
+                params: p,
+                param_count,
+                frame,
+                weight,
+                probability,
+                stride,
+            } => {
+                params.extend((0..param_count).map(|k| p[k * stride + i]));
+                let v = |k: usize| {
+                    Vec3::new(
+                        frame[3 * k * stride + i],
+                        frame[(3 * k + 1) * stride + i],
+                        frame[(3 * k + 2) * stride + i],
+                    )
+                };
+                let w = Rgb::new(weight[i], weight[stride + i], weight[2 * stride + i]);
+                (
+                    Frame {
+                        t: v(0),
+                        b: v(1),
+                        n: v(2),
+                    },
+                    w,
+                    probability[i],
+                )
+            }
+        }
+    }
+}
+
+fn lane_vec(rows: [&[f32]; 3], i: usize) -> Vec3<f32> {
+    Vec3::new(rows[0][i], rows[1][i], rows[2][i])
+}
+
+/// [`EvalJob`] one lane at a time through a scalar `eval` of a decoded block (lobes
+/// without kernels; their jobs are staged, so directions are unit).
+pub fn eval_each_lane(
+    job: &mut EvalJob<'_>,
+    eval: impl Fn(&[f32], Vec3<f32>, Vec3<f32>, Transport) -> crate::lobes::Eval<f32>,
+) {
+    debug_assert_eq!(job.directions, Directions::Unit);
+    let mut params = Vec::new();
+    for i in 0..job.len {
+        let (frame, weight, probability) = job.lobe.lane(i, &mut params);
+        let wo = frame.to_local(lane_vec(job.wo, i));
+        let wi = frame.to_local(lane_vec(job.wi, i));
+        let e = eval(&params, wo, wi, job.mode);
+        let overwrite = job.store;
+        let put = |out: &mut f32, v: f32| *out = if overwrite { v } else { *out + v };
+        if let Some(value) = &mut job.value {
+            for (row, v) in value.iter_mut().zip((weight * e.value).to_array()) {
+                put(&mut row[i], v);
+            }
+        }
+        put(&mut job.pdf[i], probability * e.pdf);
+    }
+}
+
+/// [`SampleJob`] one lane at a time through a scalar `sample_world`.
+pub fn sample_each_lane(
+    job: &mut SampleJob<'_>,
+    sample: impl Fn(&[f32], &Frame, Vec3<f32>, [f32; 3], Transport) -> Sample<f32>,
+) {
+    debug_assert!(job.directions == Directions::Unit && job.closure.is_none());
+    let mut params = Vec::new();
+    for i in 0..job.len {
+        let (frame, weight, _) = job.lobe.lane(i, &mut params);
+        let u = job.u.map(|row| mixture::clamp_random(row[i]));
+        let s = sample(&params, &frame, lane_vec(job.wo, i), u, job.mode);
+        for (row, v) in job.wi.iter_mut().zip([s.wi.x, s.wi.y, s.wi.z]) {
+            row[i] = v;
+        }
+        for (row, v) in job.value.iter_mut().zip((weight * s.value).to_array()) {
+            row[i] = v;
+        }
+        job.pdf[i] = s.pdf;
+        job.eta[i] = s.eta;
+        job.roughness[i] = s.roughness;
+        let flag = |set: bool, bit: u8| if set { bit } else { 0 };
+        if let Some(events) = job.events.as_deref_mut() {
+            events[i] = flag(s.valid, EVENT_VALID)
+                | flag(s.transmitted, EVENT_TRANSMITTED)
+                | flag(s.delta, EVENT_DELTA);
+        }
+    }
+}
+
+/// [`AlbedoJob`] one lane at a time through a scalar `albedo`.
+pub fn albedo_each_lane(
+    job: &mut AlbedoJob<'_>,
+    albedo: impl Fn(&[f32], Vec3<f32>, Transport) -> Rgb<f32>,
+) {
+    debug_assert_eq!(job.directions, Directions::Unit);
+    let mut params = Vec::new();
+    for i in 0..job.len {
+        let (frame, weight, _) = job.lobe.lane(i, &mut params);
+        let wo = frame.to_local(lane_vec(job.wo, i));
+        let v = weight * albedo(&params, wo, job.mode);
+        for (row, v) in job.value.iter_mut().zip(v.to_array()) {
+            row[i] = if job.store { v } else { row[i] + v };
+        }
+    }
+}
