@@ -7,7 +7,7 @@ mod common;
 
 use common::{Block, Outputs, Rng, lobe, soa, soa_mut};
 use glint::batch::{
-    self, BLOCK, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads,
+    self, BLOCK, BatchInput, ClosureSource, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads,
 };
 use glint::lobes::Transport;
 use glint::math::{Frame, Vec3};
@@ -149,13 +149,23 @@ fn run(
     per_lane: &[&Closure],
     l: &Lanes,
 ) -> (Outputs, Vec<Result<(), glint::Error>>) {
-    let n = per_lane.len();
+    run_with(exec, per_lane, per_lane.len(), Some(&l.active), l)
+}
+
+/// [`run`] over `n` lanes of any closure source, with an optional active mask.
+fn run_with<'a>(
+    exec: &Exec<'_>,
+    closures: impl ClosureSource<'a>,
+    n: usize,
+    active: Option<&'a [u8]>,
+    l: &'a Lanes,
+) -> (Outputs, Vec<Result<(), glint::Error>>) {
     // Outputs start at a sentinel so lanes left untouched are visible.
     let mut o = Outputs::filled(n, -7.0, 99);
     let input = BatchInput {
         count: n,
-        closures: per_lane,
-        active: Some(&l.active),
+        closures,
+        active,
         wo: soa(&l.wo),
     };
     let eval = batch::eval(
@@ -305,6 +315,58 @@ fn one_shared_closure_matches_per_lane_closures() {
             let mut pdf = vec![-7.0; n];
             batch::pdf(&exec, &input_shared, soa(&l.wi), &mut pdf).unwrap();
             assert_eq!(pdf, per.pdf_only, "{:?}", kernels.isa());
+        }
+    }
+}
+
+/// A closure shared by every lane with no active mask runs in place: the kernels read
+/// the caller's arrays, normalize in the kernel and end with a masked tail. Its
+/// outputs must be bit-for-bit those of the staged path (the same closure given per
+/// lane), at counts with tails and across chunks and blocks, and when some lanes
+/// need the staged path's exact normalization (lengths beyond 1e12) or fail (NaN,
+/// zero length, a non-finite random number), which sends their chunk back to staging.
+#[test]
+fn shared_closures_in_place_match_the_staged_path_bit_for_bit() {
+    let mut rng = Rng::new(21);
+    let all = closures(&mut rng);
+    for n in [1, 13, 300, BLOCK + 37] {
+        for bad in [false, true] {
+            let mut l = lanes(n, 1, &mut rng);
+            if bad && n > 200 {
+                for c in 0..3 {
+                    l.wo[c][5] *= 1e15;
+                    l.wi[c][6] *= 1e20;
+                    l.wo[c][150] = 0.0;
+                }
+                l.wi[1][7] = f32::NAN;
+                l.u[2][199] = f32::INFINITY;
+            }
+            for c in &all {
+                let per_lane: Vec<&Closure> = vec![c; n];
+                for kernels in Kernels::available() {
+                    let exec = Exec {
+                        kernels,
+                        threads: Threads::Caller,
+                    };
+                    let (staged, staged_results) = run_with(&exec, &per_lane[..], n, None, &l);
+                    let (shared, shared_results) = run_with(&exec, c, n, None, &l);
+                    let what = format!("{:?}, {n} lanes, bad lanes {bad}", kernels.isa());
+                    assert!(shared == staged, "{what}: outputs differ");
+                    let messages = |r: Vec<Result<(), glint::Error>>| {
+                        r.into_iter()
+                            .map(|r| r.err().map(|e| e.message))
+                            .collect::<Vec<_>>()
+                    };
+                    let expected = messages(staged_results);
+                    assert_eq!(messages(shared_results), expected, "{what}");
+                    if bad && n > 200 {
+                        let first = |k: usize| expected[k].as_deref().unwrap_or("no error");
+                        assert!(first(0).starts_with("lane 7: wi"), "{what}: {}", first(0));
+                        assert!(first(2).starts_with("lane 150: wo"), "{what}: {}", first(2));
+                        assert!(first(3).starts_with("lane 150: wo"), "{what}: {}", first(3));
+                    }
+                }
+            }
         }
     }
 }
