@@ -99,19 +99,21 @@ pub fn finish<L: Lane>(s: &Sample<L>, value: Rgb<L>, pdf: L) -> ClosureSample<L>
 /// the class; 0 for failed lanes.
 #[inline(always)]
 pub fn flags<L: Lane>(c: &ClosureSample<L>, class: u32) -> [u32; MAX_LANES] {
-    let (ok, transmitted, delta) = (c.ok.bits(), c.transmitted.bits(), c.delta.bits());
-    let mut out = [0u32; MAX_LANES];
-    for (j, f) in out[..L::LANES].iter_mut().enumerate() {
-        let set = |bits: u32| bits >> j & 1 != 0;
-        let side = if set(transmitted) {
-            flags::TRANSMISSION
-        } else {
-            flags::REFLECTION
-        };
-        let kind = if set(delta) { flags::SPECULAR } else { class };
-        *f = if set(ok) { side | kind } else { 0 };
-    }
-    out
+    // In float lanes: the side bits (1, 2) and the kind bits (4, 8, 16) are disjoint,
+    // so their sum is their union, and every value is exact.
+    let side = L::select(
+        c.transmitted,
+        L::splat(flags::TRANSMISSION as f32),
+        L::splat(flags::REFLECTION as f32),
+    );
+    let kind = L::select(
+        c.delta,
+        L::splat(flags::SPECULAR as f32),
+        L::splat(class as f32),
+    );
+    let mut lanes = [0.0f32; MAX_LANES];
+    L::select(c.ok, side + kind, L::zero()).store(&mut lanes);
+    lanes.map(|f| f as u32)
 }
 
 /// The class flags of a lobe type: its `DIFFUSE` and `GLOSSY` bits.

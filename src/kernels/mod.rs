@@ -234,7 +234,6 @@ fn for_each_register<M: Model, L: Lane>(
     len: usize,
     op: &mut impl RegisterOp<M, L>,
 ) {
-    let mut raw = [L::zero(); MAX_LOBE_PARAMS];
     match lobe {
         LobeLanes::Uniform {
             params,
@@ -242,10 +241,7 @@ fn for_each_register<M: Model, L: Lane>(
             weight,
             probability,
         } => {
-            for (r, &p) in raw.iter_mut().zip(params) {
-                *r = L::splat(p);
-            }
-            let prepared = M::prepare(Params::new(&raw[..params.len()]));
+            let prepared = M::prepare(Params::shared(params));
             let lanes = LaneLobe {
                 frame: LaneFrame::splat(&frame),
                 weight: Rgb::new(L::splat(weight.r), L::splat(weight.g), L::splat(weight.b)),
@@ -263,6 +259,7 @@ fn for_each_register<M: Model, L: Lane>(
             probability,
             stride,
         } => {
+            let mut raw = [L::zero(); MAX_LOBE_PARAMS];
             for i in (0..len).step_by(L::LANES) {
                 for (p, r) in raw[..param_count].iter_mut().enumerate() {
                     *r = L::load(&params[p * stride + i..]);
@@ -312,9 +309,17 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for SampleJob<'_> {
     #[inline(always)]
     fn run(&mut self, i: usize, n: usize, p: &M::Prepared<L>, lanes: &LaneLobe<L>) {
         let wo = direction(self.wo, i, n, self.directions, &mut self.out_of_range);
-        let [uc, u0, u1] = self.u.map(|row| load::<L>(row, i, n, 0.5));
+        // No `array::map` here: its closure may stay out of line, and the intrinsics
+        // inside it with it (see `RegisterOp`).
+        let uc = load::<L>(self.u[0], i, n, 0.5);
+        let u0 = load::<L>(self.u[1], i, n, 0.5);
+        let u1 = load::<L>(self.u[2], i, n, 0.5);
         self.out_of_range |= !(uc.is_finite() & u0.is_finite() & u1.is_finite()).all();
-        let [uc, u0, u1] = [uc, u0, u1].map(mixture::clamp_random);
+        let (uc, u0, u1) = (
+            mixture::clamp_random(uc),
+            mixture::clamp_random(u0),
+            mixture::clamp_random(u1),
+        );
         let mut settle = ToWorld::new(lanes.frame);
         let s = M::sample(
             p,

@@ -175,29 +175,56 @@ impl<L: Lane> Settle<L> for ToWorld<L> {
     }
 }
 
-/// Read access to a lobe's parameter block, laid out by its schema.
+/// Read access to a lobe's parameter block, laid out by its schema: one value per
+/// lane, or one value for every lane (a closure shared by the batch).
 #[derive(Clone, Copy)]
 pub struct Params<'a, L> {
-    raw: &'a [L],
+    source: ParamSource<'a, L>,
+}
+
+#[derive(Clone, Copy)]
+enum ParamSource<'a, L> {
+    Lanes(&'a [L]),
+    /// Splatted on read, so a shared closure's block is not copied into registers.
+    Shared(&'a [f32]),
 }
 
 impl<'a, L: Lane> Params<'a, L> {
     #[inline(always)]
     pub fn new(raw: &'a [L]) -> Self {
-        Params { raw }
+        Params {
+            source: ParamSource::Lanes(raw),
+        }
+    }
+    /// The same block for every lane.
+    #[inline(always)]
+    pub fn shared(raw: &'a [f32]) -> Self {
+        Params {
+            source: ParamSource::Shared(raw),
+        }
     }
     #[inline(always)]
     pub fn float(&self, offset: usize) -> L {
-        self.raw[offset]
+        match self.source {
+            ParamSource::Lanes(raw) => raw[offset],
+            ParamSource::Shared(raw) => L::splat(raw[offset]),
+        }
     }
     #[inline(always)]
     pub fn rgb(&self, offset: usize) -> Rgb<L> {
-        Rgb::new(self.raw[offset], self.raw[offset + 1], self.raw[offset + 2])
+        Rgb::new(
+            self.float(offset),
+            self.float(offset + 1),
+            self.float(offset + 2),
+        )
     }
     /// An enumerated choice; uniform across lanes by construction of batch groups.
     #[inline(always)]
     pub fn choice(&self, offset: usize) -> usize {
-        self.raw[offset].lane0() as usize
+        match self.source {
+            ParamSource::Lanes(raw) => raw[offset].lane0() as usize,
+            ParamSource::Shared(raw) => raw[offset] as usize,
+        }
     }
 }
 
