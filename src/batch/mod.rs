@@ -15,12 +15,13 @@
 
 mod stage;
 
-use crate::closure::{Closure, SampleResult};
+use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
 use crate::kernels::{
     AlbedoJob, ClosureRows, Directions, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob,
     LobeLanes, SampleJob, mixture,
 };
+use crate::kernels::{FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize};
 use crate::lobes::Sample;
 use crate::math::{Rgb, Vec3};
 use crate::simd::Kernels;
@@ -467,6 +468,7 @@ fn eval_in_place(
             store: k == 0,
             value: out.value.as_mut().map(|v| rows_mut(v, &local)),
             pdf: &mut out.pdf[local.clone()],
+            except: None,
             out_of_range: false,
         };
         l.lobe.eval_lanes(kernels, &mut job);
@@ -566,6 +568,7 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
             store: false,
             value: want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
             pdf: &mut pdf[..len],
+            except: None,
             out_of_range: false,
         };
         l.lobe.eval_lanes(kernels, &mut job);
@@ -904,19 +907,202 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     out: &mut SampleOutput<'_>,
 ) -> Result<(), Error> {
     let end = (start + BLOCK).min(input.count);
-    // In place: a shared closure of one lobe, which every lane chooses.
-    let one_lobe =
-        in_place(input).filter(|c| c.lobes().len() == 1 && c.lobes()[0].probability == 1.0);
-    let Some(closure) = one_lobe else {
+    let Some(closure) = in_place(input).filter(|c| !c.lobes().is_empty()) else {
         return sample_staged(kernels, input, u, start..end, start, s, out);
     };
+    s.reserve_rows(padded(CHUNK))?;
+    // One lobe, which every lane chooses: finished in the kernel.
+    let one_lobe = closure.lobes().len() == 1 && closure.lobes()[0].probability == 1.0;
     in_chunks(start..end, |chunk| {
-        if sample_in_place(kernels, closure, input.wo, u, chunk.clone(), start, s, out) {
+        let done = if one_lobe {
+            sample_in_place(kernels, closure, input.wo, u, chunk.clone(), start, s, out)
+        } else {
+            mixture_in_place(kernels, closure, input.wo, u, chunk.clone(), start, s, out)
+        };
+        if done {
             Ok(())
         } else {
             sample_staged(kernels, input, u, chunk, start, s, out)
         }
     })
+}
+
+/// Sample lanes `lanes` of a shared closure of several lobes: lobe choice in the
+/// kernels, each lobe sampled for the lanes that chose it, the other lobes evaluated
+/// at the sampled directions, all on chunk-sized rows; then each lane finished into
+/// the caller's outputs. False as [`eval_in_place`].
+#[allow(clippy::too_many_arguments)]
+fn mixture_in_place(
+    kernels: Kernels,
+    closure: &Closure,
+    wo: Soa3<'_>,
+    u: SampleRandoms<'_>,
+    lanes: Range<usize>,
+    base: usize,
+    s: &mut Scratch,
+    out: &mut SampleOutput<'_>,
+) -> bool {
+    let n = lanes.len();
+    let len = padded(n);
+    // `wo` normalized once as staging does: the other lobes are evaluated at the
+    // sampled `wi` as it is returned, so their jobs take unit directions.
+    let mut wo_rows = rows3(&mut s.wo, len);
+    for ((row, src), pad) in wo_rows
+        .iter_mut()
+        .zip(rows(wo, &lanes))
+        .zip([0.0, 0.0, 1.0])
+    {
+        row[..n].copy_from_slice(src);
+        row[n..].fill(pad);
+    }
+    if normalize(kernels, &mut wo_rows, len) {
+        return false;
+    }
+    let mut probabilities = [0.0f32; MAX_LOBES];
+    for (p, l) in probabilities.iter_mut().zip(closure.lobes()) {
+        *p = l.probability;
+    }
+    let probabilities = &probabilities[..closure.lobes().len()];
+    let chosen = grow(&mut s.chosen, n);
+    let [reused, ..] = rows3(&mut s.u, n);
+    if !choose_lobes(
+        kernels,
+        probabilities,
+        &u.u_lobe[lanes.clone()],
+        chosen,
+        reused,
+    ) {
+        return false;
+    }
+    for (k, l) in closure.lobes().iter().enumerate() {
+        if !s.chosen[..n].contains(&(k as f32)) {
+            continue;
+        }
+        let [sv_r, sv_g, sv_b] = &mut s.sample_value;
+        let mut job = SampleJob {
+            len: n,
+            mode: closure.transport(),
+            directions: Directions::Unit,
+            wo: view3(&s.wo, n),
+            u: [&s.u[0][..n], &u.u0[lanes.clone()], &u.u1[lanes.clone()]],
+            lobe: uniform_lobe(closure, k),
+            wi: rows3(&mut s.wi, n),
+            value: [grow(sv_r, n), grow(sv_g, n), grow(sv_b, n)],
+            pdf: grow(&mut s.sample_pdf, n),
+            eta: grow(&mut s.eta, n),
+            roughness: grow(&mut s.roughness, n),
+            events: Some(grow(&mut s.events, n)),
+            closure: None,
+            only: Some((&s.chosen[..n], k as f32)),
+            out_of_range: false,
+        };
+        l.lobe.sample_lanes(kernels, &mut job);
+        if job.out_of_range {
+            return false;
+        }
+    }
+    // The mixture: the chosen lobe's own value and pdf, the other lobes' added.
+    rows3(&mut s.value, n);
+    grow(&mut s.pdf, n);
+    for j in 0..n {
+        let k = s.chosen[j] as usize;
+        for (value, own) in s.value.iter_mut().zip(&s.sample_value) {
+            value[j] = own[j];
+        }
+        s.pdf[j] = probabilities[k] * s.sample_pdf[j];
+    }
+    for (k, l) in closure.lobes().iter().enumerate() {
+        let [vr, vg, vb] = &mut s.value;
+        let mut job = EvalJob {
+            len: n,
+            mode: closure.transport(),
+            directions: Directions::Unit,
+            wo: view3(&s.wo, n),
+            wi: view3(&s.wi, n),
+            lobe: uniform_lobe(closure, k),
+            store: false,
+            value: Some([&mut vr[..n], &mut vg[..n], &mut vb[..n]]),
+            pdf: &mut s.pdf[..n],
+            except: Some((&s.chosen[..n], k as f32)),
+            out_of_range: false,
+        };
+        l.lobe.eval_lanes(kernels, &mut job);
+    }
+    let mut classes = [0u32; MAX_LOBES];
+    for (c, l) in classes.iter_mut().zip(closure.lobes()) {
+        *c = mixture::class_of(l.lobe.flags());
+    }
+    let local = lanes.start - base..lanes.end - base;
+    let mut job = FinishJob {
+        len: n,
+        probabilities,
+        classes: &classes[..probabilities.len()],
+        chosen: &s.chosen[..n],
+        wi: view3(&s.wi, n),
+        own_value: view3(&s.sample_value, n),
+        own_pdf: &s.sample_pdf[..n],
+        events: &s.events[..n],
+        eta: &s.eta[..n],
+        roughness: &s.roughness[..n],
+        value: view3(&s.value, n),
+        pdf: &s.pdf[..n],
+        out: FinishOutput {
+            wi: rows_mut(&mut out.wi, &local),
+            pdf: &mut out.pdf[local.clone()],
+            weight: rows_mut(&mut out.weight, &local),
+            value: out.value.as_mut().map(|v| rows_mut(v, &local)),
+            flags: out.flags.as_deref_mut().map(|f| &mut f[local.clone()]),
+            lobe: out.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
+            eta: out.eta.as_deref_mut().map(|e| &mut e[local.clone()]),
+            roughness: out.roughness.as_deref_mut().map(|r| &mut r[local.clone()]),
+        },
+    };
+    finish_mixture(kernels, &mut job);
+    true
+}
+
+/// The closure's sample of scratch lane `j`, from the chosen lobe `k`'s sample rows
+/// (`sample_value`, `sample_pdf`, `wi`, `eta`, `roughness`, `events`) and the
+/// mixture's rows (`value`, `pdf`); `probability` is lobe `k`'s, `computed` false for
+/// a lane that failed before sampling ([`mixture::finish`]).
+fn finish_lane(
+    s: &Scratch,
+    j: usize,
+    k: usize,
+    probability: f32,
+    computed: bool,
+    lobe_flags: u32,
+) -> SampleResult {
+    let e = s.events[j];
+    let delta = e & EVENT_DELTA != 0;
+    let sampled = Sample {
+        wi: Vec3::new(s.wi[0][j], s.wi[1][j], s.wi[2][j]),
+        value: Rgb::zero(),
+        pdf: 0.0,
+        valid: computed && e & EVENT_VALID != 0,
+        transmitted: e & EVENT_TRANSMITTED != 0,
+        delta,
+        eta: s.eta[j],
+        roughness: s.roughness[j],
+    };
+    let row = |rows: &[Vec<f32>; 3]| Rgb::new(rows[0][j], rows[1][j], rows[2][j]);
+    // Delta events are not in the other lobes' eval: the chosen lobe's alone.
+    let (value, pdf) = if delta {
+        (row(&s.sample_value), probability * s.sample_pdf[j])
+    } else {
+        (row(&s.value), s.pdf[j])
+    };
+    let c = mixture::finish(&sampled, value, pdf);
+    SampleResult {
+        wi: c.wi,
+        value: c.value,
+        pdf: c.pdf,
+        weight: c.weight,
+        flags: mixture::flags(&c, mixture::class_of(lobe_flags))[0],
+        lobe: if c.ok { k as u32 } else { 0 },
+        eta: c.eta,
+        roughness: c.roughness,
+    }
 }
 
 /// Sample lanes `lanes` of a one-lobe closure in place: the kernel reads the caller's
@@ -967,6 +1153,7 @@ fn sample_in_place(
             lobe: out.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
             class: mixture::class_of(lobe.flags()),
         }),
+        only: None,
         out_of_range: false,
     };
     lobe.sample_lanes(kernels, &mut job);
@@ -1022,6 +1209,7 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
             roughness: grow(&mut s.roughness, len),
             events: Some(grow(&mut s.events, len)),
             closure: None,
+            only: None,
             out_of_range: false,
         };
         lobe.sample_lanes(kernels, &mut job);
@@ -1041,43 +1229,32 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
             eval_lobes(kernels, input, s, g, closure, Some(k), true, false);
         }
         let group = &s.groups.groups()[g];
-        let class = mixture::class_of(lobe.flags());
-        let [wr, wg, wb] = rows3(&mut s.u, len);
-        let sample_flags = grow(&mut s.flags, len);
-        let lobe_index = grow(&mut s.lobe_index, len);
+        let lobe_flags = lobe.flags();
+        grow(&mut s.flags, len);
+        grow(&mut s.lobe_index, len);
         for (j, &lane) in group.lanes.iter().enumerate() {
-            let e = s.events[j];
-            let delta = e & EVENT_DELTA != 0;
-            let sampled = Sample {
-                wi: Vec3::new(s.wi[0][j], s.wi[1][j], s.wi[2][j]),
-                value: Rgb::zero(),
-                pdf: 0.0,
-                valid: s.failed[j] == 0 && e & EVENT_VALID != 0,
-                transmitted: e & EVENT_TRANSMITTED != 0,
-                delta,
-                eta: s.eta[j],
-                roughness: s.roughness[j],
-            };
-            // Delta events are not in the other lobes' eval: the chosen lobe's alone.
-            let (value, pdf) = if delta {
-                let c = input
-                    .closures
-                    .closure(lane as usize)
-                    .expect("resolved before");
-                let own = &s.sample_value;
-                let p_own = c.lobes()[k].probability * s.sample_pdf[j];
-                (Rgb::new(own[0][j], own[1][j], own[2][j]), p_own)
-            } else {
-                let v = &s.value;
-                (Rgb::new(v[0][j], v[1][j], v[2][j]), s.pdf[j])
-            };
-            let c = mixture::finish(&sampled, value, pdf);
-            [wr[j], wg[j], wb[j]] = c.weight.to_array();
-            [s.value[0][j], s.value[1][j], s.value[2][j]] = c.value.to_array();
-            [s.wi[0][j], s.wi[1][j], s.wi[2][j]] = [c.wi.x, c.wi.y, c.wi.z];
-            (s.pdf[j], s.eta[j], s.roughness[j]) = (c.pdf, c.eta, c.roughness);
-            sample_flags[j] = mixture::flags(&c, class)[0];
-            lobe_index[j] = if c.ok { k as u32 } else { 0 };
+            let c = input
+                .closures
+                .closure(lane as usize)
+                .expect("resolved before");
+            let p = c.lobes()[k].probability;
+            let r = finish_lane(s, j, k, p, s.failed[j] == 0, lobe_flags);
+            for (c, v) in [r.wi.x, r.wi.y, r.wi.z].into_iter().enumerate() {
+                s.wi[c][j] = v;
+            }
+            for (c, (w, v)) in r
+                .weight
+                .to_array()
+                .into_iter()
+                .zip(r.value.to_array())
+                .enumerate()
+            {
+                s.u[c][j] = w;
+                s.value[c][j] = v;
+            }
+            (s.pdf[j], s.eta[j], s.roughness[j]) = (r.pdf, r.eta, r.roughness);
+            s.flags[j] = r.flags;
+            s.lobe_index[j] = r.lobe;
         }
         let (sample_flags, lobe_index) = (&s.flags, &s.lobe_index);
         let scatter = Scatter::new(&group.lanes, base, &s.failed, false);

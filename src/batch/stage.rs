@@ -423,9 +423,36 @@ pub(super) struct Scratch {
     pub events: Vec<u8>,
     pub flags: Vec<u32>,
     pub lobe_index: Vec<u32>,
+    /// The lobe each lane of an in-place mixture sample chose, as a float index.
+    pub chosen: Vec<f32>,
 }
 
 impl Scratch {
+    /// Reserve the rows an in-place chunk of `len` lanes uses.
+    pub fn reserve_rows(&mut self, len: usize) -> Result<(), Error> {
+        for rows in [
+            &mut self.wo,
+            &mut self.wi,
+            &mut self.u,
+            &mut self.value,
+            &mut self.sample_value,
+        ] {
+            for row in rows {
+                reserve(row, len)?;
+            }
+        }
+        for row in [
+            &mut self.pdf,
+            &mut self.sample_pdf,
+            &mut self.eta,
+            &mut self.roughness,
+            &mut self.chosen,
+        ] {
+            reserve(row, len)?;
+        }
+        reserve(&mut self.events, len)
+    }
+
     /// Reserve every buffer a group of `len` lanes of `closure`'s shape needs, then
     /// zero the accumulators and failure flags.
     pub fn reset(&mut self, len: usize, closure: &Closure) -> Result<(), Error> {

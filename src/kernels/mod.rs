@@ -79,8 +79,22 @@ pub struct EvalJob<'a> {
     pub value: Option<[&'a mut [f32]; 3]>,
     /// `probability * pdf`.
     pub pdf: &'a mut [f32],
+    /// `(chosen, k)`: lanes whose `chosen` lobe is `k` get nothing (a sampled
+    /// mixture, whose chosen lobe's value comes from its sample).
+    pub except: Option<(&'a [f32], f32)>,
     /// See [`Directions::Raw`].
     pub out_of_range: bool,
+}
+
+/// Lanes of a register whose `chosen` value is `k`.
+#[inline(always)]
+fn chosen_mask<L: Lane>(only: Option<(&[f32], f32)>, i: usize, n: usize) -> Option<L::Mask> {
+    // A `match`, not `Option::map`: the closure could stay out of line (`RegisterOp`).
+    #[allow(clippy::manual_map)]
+    match only {
+        Some((chosen, k)) => Some(load::<L>(chosen, i, n, -1.0).eq(L::splat(k))),
+        None => None,
+    }
 }
 
 /// A sampling job: every lane samples this lobe. Outputs are overwritten.
@@ -107,6 +121,8 @@ pub struct SampleJob<'a> {
     /// 1): weight, flags and lobe index written here, failed lanes zeroed
     /// ([`mixture::finish`]).
     pub closure: Option<ClosureRows<'a>>,
+    /// `(chosen, k)`: only lanes whose `chosen` lobe is `k` are written.
+    pub only: Option<(&'a [f32], f32)>,
     pub out_of_range: bool,
 }
 
@@ -130,6 +146,132 @@ pub struct AlbedoJob<'a> {
     /// `weight * albedo`.
     pub value: [&'a mut [f32]; 3],
     pub out_of_range: bool,
+}
+
+/// The last step of a shared closure's mixture sample, over chunk rows: the chosen
+/// lobe's sample (`own`), the mixture's value and pdf at its direction, and the
+/// closure's outputs ([`mixture::finish`]).
+pub struct FinishJob<'a> {
+    pub len: usize,
+    /// Selection probability and class flags of each lobe.
+    pub probabilities: &'a [f32],
+    pub classes: &'a [u32],
+    /// Lobe index per lane (as floats).
+    pub chosen: &'a [f32],
+    pub wi: [&'a [f32]; 3],
+    pub own_value: [&'a [f32]; 3],
+    pub own_pdf: &'a [f32],
+    pub events: &'a [u8],
+    pub eta: &'a [f32],
+    pub roughness: &'a [f32],
+    pub value: [&'a [f32]; 3],
+    pub pdf: &'a [f32],
+    pub out: FinishOutput<'a>,
+}
+
+/// The caller's sample outputs of a chunk; optional ones are skipped when `None`.
+pub struct FinishOutput<'a> {
+    pub wi: [&'a mut [f32]; 3],
+    pub pdf: &'a mut [f32],
+    pub weight: [&'a mut [f32]; 3],
+    pub value: Option<[&'a mut [f32]; 3]>,
+    pub flags: Option<&'a mut [u32]>,
+    pub lobe: Option<&'a mut [u32]>,
+    pub eta: Option<&'a mut [f32]>,
+    pub roughness: Option<&'a mut [f32]>,
+}
+
+#[inline(always)]
+fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
+    for i in (0..job.len).step_by(L::LANES) {
+        let n = L::LANES.min(job.len - i);
+        let chosen = load::<L>(job.chosen, i, n, 0.0);
+        let (mut probability, mut class) = (L::zero(), L::zero());
+        for (k, (&p, &c)) in job.probabilities.iter().zip(job.classes).enumerate() {
+            let is_k = chosen.eq(L::splat(k as f32));
+            probability = L::select(is_k, L::splat(p), probability);
+            class = L::select(is_k, L::splat(c as f32), class);
+        }
+        let mut e = [0.0f32; MAX_LANES];
+        for (e, &x) in e.iter_mut().zip(&job.events[i..i + n]) {
+            *e = f32::from(x);
+        }
+        let e = L::load(&e);
+        let (valid, transmitted, delta) = (
+            event_bit(e, EVENT_VALID),
+            event_bit(e, EVENT_TRANSMITTED),
+            event_bit(e, EVENT_DELTA),
+        );
+        let own_value = load_rgb::<L>(job.own_value, i, n);
+        let own_pdf = load::<L>(job.own_pdf, i, n, 0.0);
+        let s = Sample {
+            wi: load3(job.wi, i, n),
+            value: own_value,
+            pdf: own_pdf,
+            valid,
+            transmitted,
+            delta,
+            eta: load(job.eta, i, n, 1.0),
+            roughness: load(job.roughness, i, n, 0.0),
+        };
+        // Delta events are not in the other lobes' eval: the chosen lobe's alone.
+        let value = Rgb::select(delta, own_value, load_rgb(job.value, i, n));
+        let pdf = L::select(delta, probability * own_pdf, load(job.pdf, i, n, 0.0));
+        let c = mixture::finish(&s, value, pdf);
+        let out = &mut job.out;
+        for (v, row) in [c.wi.x, c.wi.y, c.wi.z].into_iter().zip(out.wi.iter_mut()) {
+            store(v, row, i, n);
+        }
+        store(c.pdf, out.pdf, i, n);
+        for (v, row) in c.weight.to_array().into_iter().zip(out.weight.iter_mut()) {
+            store(v, row, i, n);
+        }
+        if let Some(rows) = out.value.as_mut() {
+            for (v, row) in c.value.to_array().into_iter().zip(rows.iter_mut()) {
+                store(v, row, i, n);
+            }
+        }
+        if let Some(e) = out.eta.as_deref_mut() {
+            store(c.eta, e, i, n);
+        }
+        if let Some(r) = out.roughness.as_deref_mut() {
+            store(c.roughness, r, i, n);
+        }
+        let mut lanes = [0.0f32; MAX_LANES];
+        if let Some(f) = out.flags.as_deref_mut() {
+            // The class varies per lane here; `mixture::flags` takes it as 0 and the
+            // class lanes are added (disjoint bits) where the event is not delta.
+            let kind = L::select(c.ok & !c.delta, class, L::zero());
+            let base = mixture::flags(&c, 0);
+            kind.store(&mut lanes);
+            for ((f, &b), &k) in f[i..i + n].iter_mut().zip(&base).zip(&lanes) {
+                *f = b | k as u32;
+            }
+        }
+        if let Some(l) = out.lobe.as_deref_mut() {
+            L::select(c.ok, chosen, L::zero()).store(&mut lanes);
+            for (l, &k) in l[i..i + n].iter_mut().zip(&lanes) {
+                *l = k as u32;
+            }
+        }
+    }
+}
+
+/// Whether the `EVENT_*` bit `bit` is set in the events `e` (small integers held
+/// exactly in floats): `floor(e / bit)` is odd.
+#[inline(always)]
+fn event_bit<L: Lane>(e: L, bit: u8) -> L::Mask {
+    let shifted = (e * L::splat(1.0 / f32::from(bit))).floor();
+    (shifted - L::splat(2.0) * (shifted * L::splat(0.5)).floor()).eq(L::one())
+}
+
+#[inline(always)]
+fn load_rgb<L: Lane>(rows: [&[f32]; 3], i: usize, n: usize) -> Rgb<L> {
+    Rgb::new(
+        load(rows[0], i, n, 0.0),
+        load(rows[1], i, n, 0.0),
+        load(rows[2], i, n, 0.0),
+    )
 }
 
 /// A lobe instance's per-lane data, loaded or splatted.
@@ -156,6 +298,16 @@ fn store<L: Lane>(v: L, row: &mut [f32], i: usize, n: usize) {
     } else {
         v.store_tail(&mut row[i..], n);
     }
+}
+
+/// `row[i..] = v` in the lanes of `only` (all lanes when `None`).
+#[inline(always)]
+fn store_where<L: Lane>(only: Option<L::Mask>, v: L, row: &mut [f32], i: usize, n: usize) {
+    let v = match only {
+        Some(mask) => L::select(mask, v, load(row, i, n, 0.0)),
+        None => v,
+    };
+    store(v, row, i, n);
 }
 
 /// `row[i..] = v`, or `+= v` unless `overwrite`.
@@ -295,13 +447,17 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for EvalJob<'_> {
             lanes.frame.to_local(wi),
             self.mode,
         );
-        if let Some(value) = &mut self.value {
-            let v = lanes.weight * e.value;
-            for (v, row) in v.to_array().into_iter().zip(value.iter_mut()) {
+        let (mut value, mut pdf) = (lanes.weight * e.value, lanes.probability * e.pdf);
+        if let Some(excluded) = chosen_mask::<L>(self.except, i, n) {
+            value = Rgb::select(excluded, Rgb::zero(), value);
+            pdf = L::select(excluded, L::zero(), pdf);
+        }
+        if let Some(rows) = &mut self.value {
+            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
                 put(v, row, i, n, self.store);
             }
         }
-        put(lanes.probability * e.pdf, self.pdf, i, n, self.store);
+        put(pdf, self.pdf, i, n, self.store);
     }
 }
 
@@ -354,23 +510,27 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for SampleJob<'_> {
                 (c.wi, c.value, c.pdf, c.eta, c.roughness)
             }
         };
+        let only = chosen_mask::<L>(self.only, i, n);
         for (v, row) in [wi.x, wi.y, wi.z].into_iter().zip(self.wi.iter_mut()) {
-            store(v, row, i, n);
+            store_where(only, v, row, i, n);
         }
         for (v, row) in value.to_array().into_iter().zip(self.value.iter_mut()) {
-            store(v, row, i, n);
+            store_where(only, v, row, i, n);
         }
-        store(pdf, self.pdf, i, n);
-        store(eta, self.eta, i, n);
-        store(roughness, self.roughness, i, n);
+        store_where(only, pdf, self.pdf, i, n);
+        store_where(only, eta, self.eta, i, n);
+        store_where(only, roughness, self.roughness, i, n);
         if let Some(events) = self.events.as_deref_mut() {
             let (valid, transmitted, delta) =
                 (s.valid.bits(), s.transmitted.bits(), s.delta.bits());
+            let written = only.map_or(u32::MAX, |m| m.bits());
             for (j, e) in events[i..i + n].iter_mut().enumerate() {
                 let bit = |m: u32, flag: u8| if m >> j & 1 != 0 { flag } else { 0 };
-                *e = bit(valid, EVENT_VALID)
-                    | bit(transmitted, EVENT_TRANSMITTED)
-                    | bit(delta, EVENT_DELTA);
+                if written >> j & 1 != 0 {
+                    *e = bit(valid, EVENT_VALID)
+                        | bit(transmitted, EVENT_TRANSMITTED)
+                        | bit(delta, EVENT_DELTA);
+                }
             }
         }
     }
@@ -420,6 +580,39 @@ fn normalize_body<L: Lane>(v: &mut [&mut [f32]; 3], len: usize) -> bool {
     any
 }
 
+/// The lobe each lane's `u` chooses among `probabilities` ([`mixture::choose`]), as
+/// an index in `chosen`, and `u` rescaled for it in `reused`; false when some `u` is
+/// not finite or no lobe can be chosen (the outputs are then incomplete).
+#[inline(always)]
+fn choose_body<L: Lane>(
+    probabilities: &[f32],
+    u: &[f32],
+    chosen: &mut [f32],
+    reused: &mut [f32],
+) -> bool {
+    for i in (0..u.len()).step_by(L::LANES) {
+        let n = L::LANES.min(u.len() - i);
+        let x = load::<L>(u, i, n, 0.5);
+        let Some((k, r)) = mixture::choose(probabilities, x) else {
+            return false;
+        };
+        if !x.is_finite().all() {
+            return false;
+        }
+        store(k, chosen, i, n);
+        store(r, reused, i, n);
+    }
+    true
+}
+
+kernel!(
+    /// Choose the lobe of each lane of a shared closure (`choose_body`).
+    choose_lobes<>(probabilities: &[f32], u: &[f32], chosen: &mut [f32], reused: &mut [f32]) -> bool => choose_body
+);
+kernel!(
+    /// Finish a shared closure's mixture samples (`finish_body`).
+    finish_mixture<>(job: &mut FinishJob<'_>) => finish_body
+);
 kernel!(
     /// `M::eval` over a job's lanes.
     eval<M: Model>(job: &mut EvalJob<'_>) => eval_body
@@ -493,7 +686,7 @@ pub fn eval_each_lane(
     job: &mut EvalJob<'_>,
     eval: impl Fn(&[f32], Vec3<f32>, Vec3<f32>, Transport) -> crate::lobes::Eval<f32>,
 ) {
-    debug_assert_eq!(job.directions, Directions::Unit);
+    debug_assert!(job.directions == Directions::Unit && job.except.is_none());
     let mut params = Vec::new();
     for i in 0..job.len {
         let (frame, weight, probability) = job.lobe.lane(i, &mut params);
@@ -517,6 +710,7 @@ pub fn sample_each_lane(
     sample: impl Fn(&[f32], &Frame, Vec3<f32>, [f32; 3], Transport) -> Sample<f32>,
 ) {
     debug_assert!(job.directions == Directions::Unit && job.closure.is_none());
+    debug_assert!(job.only.is_none());
     let mut params = Vec::new();
     for i in 0..job.len {
         let (frame, weight, _) = job.lobe.lane(i, &mut params);
