@@ -11,7 +11,9 @@ and numpy from PyPI and re-runs itself there.
 Both libraries get the same SoA inputs: cosine-distributed wo and wi in the local frame
 (normal +z; for the dielectric every other wi is mirrored below the surface so that
 transmission is exercised), and the same uniform numbers for sampling. Glint is called
-through its C ABI (ctypes; one closure shared by all lanes); Mitsuba runs the
+through its C ABI (one closure shared by all lanes), timed by a loop in C
+(c_bench/batch_loop.c, built here with gcc) so that small batches do not measure
+ctypes; Mitsuba runs the
 `llvm_ad_rgb` variant with BSDF.eval_pdf and BSDF.sample (Glint's wo is Mitsuba's si.wi,
 Glint's wi is Mitsuba's wo). Both eval outputs include the cosine of the light direction.
 Reported: medians over repeated runs in M lanes/s; Mitsuba both as the wall time of a
@@ -38,6 +40,8 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 VENV = ROOT / "target" / "bench-venv"
 LIBGLINT = ROOT / "target" / "release" / "libglint.so"
 LIBLLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+LOOP_SRC = ROOT / "c_bench" / "batch_loop.c"
+LOOP_LIB = ROOT / "target" / "bench-loop.so"
 
 ALPHA = 0.2  # Mitsuba's GGX alpha; Glint's roughness is sqrt(alpha)
 IOR = 1.5
@@ -122,6 +126,15 @@ class Glint:
         lib.glint_eval_batch.argtypes = [ctypes.POINTER(EvalArgs)]
         lib.glint_sample_batch.argtypes = [ctypes.POINTER(SampleArgs)]
         self.lib = lib
+        # Glint is timed by a loop in C: ctypes costs more per call than a small batch.
+        if (not LOOP_LIB.exists()
+                or LOOP_LIB.stat().st_mtime < LOOP_SRC.stat().st_mtime):
+            run(["gcc", "-O2", "-shared", "-fPIC", "-Wall", "-Wextra", "-Wpedantic", "-Werror",
+                 str(LOOP_SRC), "-o", str(LOOP_LIB)])
+        loop = ctypes.CDLL(str(LOOP_LIB))
+        loop.glint_bench_loop.restype = ctypes.c_double
+        loop.glint_bench_loop.argtypes = [VOIDP, VOIDP, ctypes.c_int32]
+        self.loop = loop.glint_bench_loop
 
     def check(self, status, what):
         if status:
@@ -173,6 +186,20 @@ class GlintBatch:
     def __call__(self):
         self.glint.check(self.fn(self.ref), self.op)
         return self.out
+
+    def seconds(self, calls):
+        """Seconds for `calls` calls, timed in C."""
+        fn = ctypes.cast(self.fn, VOIDP)
+        t = self.glint.loop(fn, ctypes.addressof(self.args), calls)
+        if t < 0:
+            self.glint.check(int(-t), self.op)
+        return t
+
+
+def median_c(batch, inner, repeats):
+    """Median seconds of one call of `batch`, each sample `inner` calls timed in C."""
+    batch.seconds(2)
+    return statistics.median(batch.seconds(inner) / inner for _ in range(repeats))
 
 
 # --- inputs and cases --------------------------------------------------------------
@@ -341,7 +368,7 @@ def benchmark(args, glint, runtimes, mits, cases, np):
                     mcall = (mits.eval_call(bsdf, si, wo) if op == "eval"
                              else mits.sample_call(bsdf, si, u_lobe, u2))
                     gcall = GlintBatch(glint, closure, d, op, np) if closure else None
-                    g = rate(n, median_wall(gcall, inner, repeats)) if gcall else None
+                    g = rate(n, median_c(gcall, inner, repeats)) if gcall else None
                     mw = rate(n, median_wall(mcall, inner, repeats))
                     seconds, miss = median_kernel(mits, mcall, inner, repeats)
                     mk = rate(n, seconds)
