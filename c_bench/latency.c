@@ -1,6 +1,8 @@
-/* Scalar C-call latency: the median time of one glint_eval and one glint_sample call
- * per registered lobe type (a closure holding that lobe alone, default parameters),
- * measured through the public C ABI as a ray tracer calls it. Prints a Markdown table.
+/* Scalar C-call latency: the median time of one glint_eval, glint_eval_forward and
+ * glint_sample call per registered lobe type (a closure holding that lobe alone,
+ * default parameters), measured through the public C ABI as a ray tracer calls it,
+ * and of building a two-lobe closure (lambert + conductor) from parameter blocks.
+ * Prints a Markdown table.
  *
  *   build/c_bench/latency [calls-per-repeat]
  */
@@ -44,6 +46,48 @@ static void check(glint_status st, const char *what)
     }
 }
 
+/* Median time of glint_closure_begin, two glint_closure_add_lobe (lambert and a
+ * conductor, full parameter blocks) and glint_closure_finish, the arena reset every
+ * 64 closures (the reset's time included). */
+static void build_two_lobes(glint_runtime *rt, glint_arena *arena, long calls)
+{
+    const float weight[3] = {0.5f, 0.5f, 0.5f};
+    const glint_frame frame = {{0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f}};
+    const glint_vec3 wo = {0.3f, 0.2f, 0.93f};
+    uint32_t ids[2];
+    float blocks[2][64];
+    uint32_t sizes[2];
+    double ns[REPEATS];
+    int rep, b;
+    check(glint_lobe_type_find(rt, "lambert", &ids[0]), "find lambert");
+    check(glint_lobe_type_find(rt, "conductor", &ids[1]), "find conductor");
+    for (b = 0; b < 2; b++) {
+        glint_lobe_info info;
+        info.struct_size = sizeof info;
+        check(glint_lobe_type_info(rt, ids[b], &info), "info");
+        check(glint_lobe_param_defaults(rt, ids[b], blocks[b], 64), "defaults");
+        sizes[b] = info.param_block_size;
+    }
+    for (rep = 0; rep < REPEATS; rep++) {
+        double t0 = now_ns();
+        long k;
+        for (k = 0; k < calls; k++) {
+            glint_closure *c = NULL;
+            if (k % 64 == 0)
+                check(glint_arena_reset(arena), "reset");
+            check(glint_closure_begin(rt, arena, &wo, 0, &c), "begin");
+            for (b = 0; b < 2; b++)
+                check(glint_closure_add_lobe(c, ids[b], weight, &frame, blocks[b], sizes[b], NULL),
+                      "add");
+            check(glint_closure_finish(c), "finish");
+        }
+        ns[rep] = (now_ns() - t0) / (double)calls;
+    }
+    qsort(ns, REPEATS, sizeof(double), cmp_double);
+    printf("\n| two-lobe closure from blocks (begin, 2 add_lobe, finish) | %.1f ns |\n"
+           "| --- | --- |\n", ns[REPEATS / 2]);
+}
+
 int main(int argc, char **argv)
 {
     long calls = argc > 1 ? atol(argv[1]) : 200000;
@@ -67,13 +111,14 @@ int main(int argc, char **argv)
         wi[i].x = r * cosf(phi), wi[i].y = r * sinf(phi), wi[i].z = z;
         u[i][0] = next(&seed), u[i][1] = next(&seed), u[i][2] = next(&seed);
     }
-    printf("| lobe | glint_eval (ns) | glint_sample (ns) |\n| --- | --- | --- |\n");
+    printf("| lobe | glint_eval (ns) | glint_eval_forward (ns) | glint_sample (ns) |\n"
+           "| --- | --- | --- | --- |\n");
     for (id = 0; id < count; id++) {
         glint_lobe_info info;
         glint_closure *c = NULL;
         const float weight[3] = {1.0f, 1.0f, 1.0f};
         const glint_frame frame = {{0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f}};
-        double eval_ns[REPEATS], sample_ns[REPEATS];
+        double eval_ns[REPEATS], forward_ns[REPEATS], sample_ns[REPEATS];
         float sink = 0.0f;
         int rep;
         info.struct_size = sizeof info;
@@ -93,6 +138,14 @@ int main(int argc, char **argv)
             eval_ns[rep] = (now_ns() - t0) / (double)calls;
             t0 = now_ns();
             for (k = 0; k < calls; k++) {
+                glint_eval_result r;
+                r.struct_size = sizeof r;
+                check(glint_eval_forward(c, wo[k % DIRS], wi[k % DIRS], &r), "eval_forward");
+                sink += r.pdf;
+            }
+            forward_ns[rep] = (now_ns() - t0) / (double)calls;
+            t0 = now_ns();
+            for (k = 0; k < calls; k++) {
                 glint_sample_result s;
                 const float *uk = u[k % DIRS];
                 s.struct_size = sizeof s;
@@ -102,11 +155,14 @@ int main(int argc, char **argv)
             sample_ns[rep] = (now_ns() - t0) / (double)calls;
         }
         qsort(eval_ns, REPEATS, sizeof(double), cmp_double);
+        qsort(forward_ns, REPEATS, sizeof(double), cmp_double);
         qsort(sample_ns, REPEATS, sizeof(double), cmp_double);
-        printf("| %s | %.1f | %.1f |\n", info.name, eval_ns[REPEATS / 2], sample_ns[REPEATS / 2]);
+        printf("| %s | %.1f | %.1f | %.1f |\n", info.name, eval_ns[REPEATS / 2],
+               forward_ns[REPEATS / 2], sample_ns[REPEATS / 2]);
         if (!(sink >= 0.0f))
             fprintf(stderr, "unexpected pdf sum\n");
     }
+    build_two_lobes(rt, arena, calls);
     printf("\n(median of %d repeats of %ld calls; glint_runtime_isa: %s)\n", REPEATS, calls, isa);
     glint_arena_destroy(arena);
     glint_runtime_destroy(rt);

@@ -121,6 +121,18 @@ static void check_single_lobe_closure(const glint_closure *c, uint32_t id, const
         check_eval_result(&e);
         assert_ok(glint_eval_lobe(c, 0, wo, wi, &el));
         check_eval_result(&el);
+        /* The forward calls: the same value and pdf, bit for bit, and no reverse pdf. */
+        {
+            glint_eval_result f = eval_result_init(), fl = eval_result_init();
+            f.pdf_reverse = fl.pdf_reverse = -7.0f;
+            assert_ok(glint_eval_forward(c, wo, wi, &f));
+            assert_ok(glint_eval_lobe_forward(c, 0, wo, wi, &fl));
+            assert_memory_equal(f.value, e.value, sizeof f.value);
+            assert_memory_equal(fl.value, el.value, sizeof fl.value);
+            assert_memory_equal(&f.pdf, &e.pdf, sizeof f.pdf);
+            assert_memory_equal(&fl.pdf, &el.pdf, sizeof fl.pdf);
+            assert_true(f.pdf_reverse == 0.0f && fl.pdf_reverse == 0.0f);
+        }
         assert_ok(glint_pdf(c, wo, wi, &pdf));
         assert_ok(glint_pdf_lobe(c, 0, wo, wi, &pdf_lobe));
         assert_ok(glint_pdf(c, wi, wo, &pdf_back));

@@ -289,6 +289,8 @@ static void closure_state_errors(void **state)
     check_error(fx, glint_pdf(c, wo, wo, &pdf), GLINT_ERROR_INVALID_STATE);
     check_error(fx, glint_albedo(c, wo, rgb), GLINT_ERROR_INVALID_STATE);
     check_error(fx, glint_eval_lobe(c, 0, wo, wo, &e), GLINT_ERROR_INVALID_STATE);
+    check_error(fx, glint_eval_forward(c, wo, wo, &e), GLINT_ERROR_INVALID_STATE);
+    check_error(fx, glint_eval_lobe_forward(c, 0, wo, wo, &e), GLINT_ERROR_INVALID_STATE);
     check_error(fx, glint_sample_lobe(c, 0, wo, 0.5f, 0.5f, 0.5f, &s), GLINT_ERROR_INVALID_STATE);
     check_error(fx, glint_pdf_lobe(c, 0, wo, wo, &pdf), GLINT_ERROR_INVALID_STATE);
     check_error(fx, glint_albedo_lobe(c, 0, wo, rgb), GLINT_ERROR_INVALID_STATE);
@@ -342,6 +344,13 @@ static void query_errors(void **state)
     check_error(fx, glint_albedo(c, wo, NULL), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_eval_lobe(NULL, 0, wo, wi, &e), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_eval_lobe(c, 0, wo, wi, NULL), GLINT_ERROR_NULL_POINTER);
+    check_error(fx, glint_eval_forward(NULL, wo, wi, &e), GLINT_ERROR_NULL_POINTER);
+    check_error(fx, glint_eval_forward(c, wo, wi, NULL), GLINT_ERROR_NULL_POINTER);
+    check_error(fx, glint_eval_lobe_forward(NULL, 0, wo, wi, &e), GLINT_ERROR_NULL_POINTER);
+    check_error(fx, glint_eval_lobe_forward(c, 0, wo, wi, NULL), GLINT_ERROR_NULL_POINTER);
+    check_error(fx, glint_eval_lobe_forward(c, 2, wo, wi, &e), GLINT_ERROR_OUT_OF_RANGE);
+    assert_error_mentions("lobe index");
+    check_error(fx, glint_eval_forward(c, v3(NAN, 0, 1), wi, &e), GLINT_ERROR_INVALID_ARGUMENT);
     check_error(fx, glint_sample_lobe(NULL, 0, wo, 0.5f, 0.5f, 0.5f, &s), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_sample_lobe(c, 0, wo, 0.5f, 0.5f, 0.5f, NULL), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_pdf_lobe(NULL, 0, wo, wi, &pdf), GLINT_ERROR_NULL_POINTER);
@@ -423,6 +432,8 @@ static void result_struct_size_errors(void **state)
         check_error(fx, glint_eval(fx->ok, wo, wo, &e), GLINT_ERROR_STRUCT_SIZE);
         assert_error_mentions("struct_size");
         check_error(fx, glint_eval_lobe(fx->ok, 0, wo, wo, &e), GLINT_ERROR_STRUCT_SIZE);
+        check_error(fx, glint_eval_forward(fx->ok, wo, wo, &e), GLINT_ERROR_STRUCT_SIZE);
+        check_error(fx, glint_eval_lobe_forward(fx->ok, 0, wo, wo, &e), GLINT_ERROR_STRUCT_SIZE);
         assert_true(e.value[0] == -7.0f);
         assert_int_equal(e.struct_size, small_eval[i]);
         s.struct_size = small_sample[i];

@@ -545,12 +545,23 @@ glint_status glint_closure_lobe(const struct glint_closure *closure, uint32_t in
 
 /*
  The closure at `(wo, wi)`: `sum_k weight_k f_k |cos theta_i|`, the mixture pdf
- and the reverse pdf. Directions are world space and need not be normalized.
+ and the reverse pdf (for bidirectional hosts; it evaluates every lobe twice, so
+ unidirectional hosts call `glint_eval_forward`). Directions are world space and
+ need not be normalized.
 
  # Safety
  `closure` NULL or live; `out` NULL or writable with `struct_size` set.
  */
 glint_status glint_eval(const struct glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
+
+/*
+ `glint_eval` without the reverse pdf: value and pdf only, each lobe evaluated
+ once; `out->pdf_reverse` is set to 0.
+
+ # Safety
+ As `glint_eval`.
+ */
+glint_status glint_eval_forward(const struct glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
 
 /*
  Sample the closure: `u_lobe` picks a lobe, `u0`, `u1` a direction (all in [0, 1)).
@@ -585,6 +596,14 @@ glint_status glint_albedo(const struct glint_closure *closure, struct glint_vec3
  As `glint_eval`.
  */
 glint_status glint_eval_lobe(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
+
+/*
+ `glint_eval_lobe` without the reverse pdf (`out->pdf_reverse` is set to 0).
+
+ # Safety
+ As `glint_eval`.
+ */
+glint_status glint_eval_lobe_forward(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
 
 /*
  Sample lobe `lobe` alone (`u_c` chooses among its discrete events, e.g. reflect or

@@ -135,12 +135,26 @@ pub const fn block_size(specs: &[ParamSpec]) -> usize {
 
 /// Whether two blocks of the same schema make the same enumerated choices.
 pub fn same_choices(specs: &[ParamSpec], a: &[f32], b: &[f32]) -> bool {
-    let mut offset = 0;
-    specs.iter().all(|s| {
-        let at = offset;
-        offset += s.kind.size();
-        s.kind != ParamKind::Enum || a[at] == b[at]
-    })
+    enum_offsets(specs).all(|at| a[at] == b[at])
+}
+
+/// Call `f` with each enumerated choice of `block`, in schema order.
+pub fn for_each_choice(specs: &[ParamSpec], block: &[f32], mut f: impl FnMut(u32)) {
+    for at in enum_offsets(specs) {
+        f(block[at] as u32);
+    }
+}
+
+/// Block offsets of the schema's enumerated parameters.
+fn enum_offsets(specs: &[ParamSpec]) -> impl Iterator<Item = usize> + '_ {
+    specs
+        .iter()
+        .scan(0, |offset, s| {
+            let at = *offset;
+            *offset += s.kind.size();
+            Some((at, s.kind == ParamKind::Enum))
+        })
+        .filter_map(|(at, is_enum)| is_enum.then_some(at))
 }
 
 /// Write the schema's defaults into `out` (which must hold `block_size(specs)` slots).

@@ -682,3 +682,52 @@ fn full_closures_at_the_largest_weight_stay_finite() {
     let albedo = c.albedo(wo).unwrap();
     assert_close3(albedo.to_array(), [expected; 3], 1e-5, 0.0, "albedo");
 }
+
+/// Shape ids (the batch's O(1) grouping key) agree exactly when `same_shape` does:
+/// parameters and frames do not change a shape; lobe types, their order, an
+/// enumerated choice and the transport do.
+#[test]
+fn shape_ids_follow_same_shape() {
+    let registry = Registry::with_builtins();
+    let build = |names: &[&str], fresnel: &str, mode: Transport, roughness: f32| {
+        let mut c = Closure::new(None, mode);
+        for name in names {
+            let mut block = Block::defaults(lobe(name));
+            if *name == "conductor" {
+                block = block
+                    .choice("fresnel", fresnel)
+                    .float("roughness", roughness);
+            }
+            let frame = Frame::new(Vec3::new(0.0, roughness, 1.0).normalize(), None);
+            c.add_lobe(
+                &registry,
+                id(&registry, name),
+                [1.0; 3],
+                frame,
+                Some(block.as_slice()),
+            )
+            .unwrap();
+        }
+        c.finish().unwrap();
+        c
+    };
+    let r = Transport::Radiance;
+    let base = build(&["lambert", "conductor"], "schlick", r, 0.3);
+    let same = build(&["lambert", "conductor"], "schlick", r, 0.7);
+    let others = [
+        build(&["conductor", "lambert"], "schlick", r, 0.3),
+        build(&["lambert", "conductor"], "conductor", r, 0.3),
+        build(
+            &["lambert", "conductor"],
+            "schlick",
+            Transport::Importance,
+            0.3,
+        ),
+        build(&["lambert"], "schlick", r, 0.3),
+    ];
+    assert!(base.same_shape(&same) && base.shape_id() == same.shape_id());
+    for o in &others {
+        assert!(!base.same_shape(o));
+        assert_ne!(base.shape_id(), o.shape_id());
+    }
+}

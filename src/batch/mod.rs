@@ -424,7 +424,7 @@ fn rows_mut<'r>(v: &'r mut Soa3Mut<'_>, lanes: &Range<usize>) -> [&'r mut [f32];
 fn uniform_lobe(closure: &Closure, k: usize) -> LobeLanes<'_> {
     let l = &closure.lobes()[k];
     LobeLanes::Uniform {
-        params: closure.lobe_params(k),
+        params: closure.lobe_decoded(k),
         frame: l.frame,
         weight: l.weight,
         probability: l.probability,

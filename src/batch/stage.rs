@@ -11,6 +11,7 @@ use crate::kernels::{LANE_MULTIPLE, LobeLanes, normalize};
 use crate::math::Vec3;
 use crate::simd::Kernels;
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::ops::Range;
 
 /// Lanes of one block whose closures have one shape (and, when sampling, chose
@@ -38,6 +39,8 @@ pub(super) struct Groups {
     error: Option<(usize, Error)>,
     /// Per block-local lane: the lobe-choice number rescaled for the chosen lobe.
     pub u_reused: Vec<f32>,
+    /// Group by (shape id, chosen lobe), for the groups created this block.
+    index: HashMap<(u64, usize), usize>,
 }
 
 /// The random numbers of a sampling call.
@@ -79,6 +82,7 @@ impl Groups {
         randoms: Option<Randoms<'_>>,
     ) -> Result<(), Error> {
         self.used = 0;
+        self.index.clear();
         self.failed.clear();
         self.error = None;
         self.u_reused.clear();
@@ -216,12 +220,23 @@ impl Groups {
         lobe: usize,
     ) -> Result<usize, Error> {
         let closure = input.closures.closure(lane).expect("resolved before");
-        let found = self.groups().iter().position(|g| {
-            g.lobe == lobe
-                && closure.same_shape(input.closures.closure(g.rep).expect("resolved before"))
-        });
-        if let Some(g) = found {
-            return Ok(g);
+        let rep = |g: usize| {
+            input
+                .closures
+                .closure(self.list[g].rep)
+                .expect("resolved before")
+        };
+        let key = (closure.shape_id(), lobe);
+        if let Some(&g) = self.index.get(&key) {
+            if closure.same_shape(rep(g)) {
+                return Ok(g);
+            }
+            // Two shapes with one id (a hash collision): search the groups.
+            let found =
+                (0..self.used).find(|&g| self.list[g].lobe == lobe && closure.same_shape(rep(g)));
+            if let Some(g) = found {
+                return Ok(g);
+            }
         }
         if self.used == self.list.len() {
             reserve(&mut self.list, self.used + 1)?;
@@ -240,6 +255,10 @@ impl Groups {
         g.lobe = lobe;
         g.lanes.clear();
         self.used += 1;
+        if !self.index.contains_key(&key) {
+            self.index.try_reserve(1).map_err(|_| out_of_memory())?;
+            self.index.insert(key, self.used - 1);
+        }
         Ok(self.used - 1)
     }
 }
@@ -247,14 +266,16 @@ impl Groups {
 /// Room for `len` values in `v`, or `Status::OutOfMemory`.
 pub(super) fn reserve<T>(v: &mut Vec<T>, len: usize) -> Result<(), Error> {
     match len.checked_sub(v.len()) {
-        Some(more) if more > 0 => v.try_reserve(more).map_err(|_| {
-            Error::new(
-                Status::OutOfMemory,
-                "out of memory: the batch's staging buffers could not grow",
-            )
-        }),
+        Some(more) if more > 0 => v.try_reserve(more).map_err(|_| out_of_memory()),
         _ => Ok(()),
     }
+}
+
+fn out_of_memory() -> Error {
+    Error::new(
+        Status::OutOfMemory,
+        "out of memory: the batch's staging buffers could not grow",
+    )
 }
 
 /// Grow `v` to at least `len` values (never shrinks, never zeroes); within what
@@ -359,13 +380,13 @@ impl LobeRows {
         if group.uniform {
             let l = &rep.lobes()[k];
             return LobeLanes::Uniform {
-                params: rep.lobe_params(k),
+                params: rep.lobe_decoded(k),
                 frame: l.frame,
                 weight: l.weight,
                 probability: l.probability,
             };
         }
-        let param_count = rep.lobe_params(k).len();
+        let param_count = rep.lobe_decoded(k).len();
         let params = grow(&mut self.params, param_count * len);
         let frame = grow(&mut self.frame, 9 * len);
         let weight = grow(&mut self.weight, 3 * len);
@@ -375,7 +396,7 @@ impl LobeRows {
         for j in 0..len {
             let c = closure_of(lane_at(j));
             let l = &c.lobes()[k];
-            for (p, &v) in c.lobe_params(k).iter().enumerate() {
+            for (p, &v) in c.lobe_decoded(k).iter().enumerate() {
                 params[p * len + j] = v;
             }
             let axes = [l.frame.t, l.frame.b, l.frame.n];
@@ -457,7 +478,7 @@ impl Scratch {
     /// zero the accumulators and failure flags.
     pub fn reset(&mut self, len: usize, closure: &Closure) -> Result<(), Error> {
         let params = (0..closure.lobes().len())
-            .map(|k| closure.lobe_params(k).len())
+            .map(|k| closure.lobe_decoded(k).len())
             .max()
             .unwrap_or(0);
         let lobe = &mut self.lobe;

@@ -38,6 +38,8 @@ pub struct LobeInstance {
     pub frame: Frame,
     params_start: u16,
     params_len: u16,
+    decoded_start: u16,
+    decoded_len: u16,
     /// Probability of choosing this lobe when sampling.
     pub probability: f32,
 }
@@ -53,6 +55,8 @@ const EMPTY_LOBE: LobeInstance = LobeInstance {
     frame: Frame::IDENTITY,
     params_start: 0,
     params_len: 0,
+    decoded_start: 0,
+    decoded_len: 0,
     probability: 0.0,
 };
 
@@ -112,6 +116,11 @@ pub struct Closure {
     lobe_count: usize,
     params: [f32; MAX_PARAM_VALUES],
     params_len: usize,
+    /// The lobes' blocks decoded once (`LobeType::decode`), as every call reads them.
+    decoded: [f32; MAX_PARAM_VALUES],
+    decoded_len: usize,
+    /// A hash of the shape ([`Self::same_shape`]), fixed by `finish`.
+    shape_id: u64,
     wo: Option<Vec3<f32>>,
     mode: Transport,
     finished: bool,
@@ -125,6 +134,9 @@ impl Closure {
             lobe_count: 0,
             params: [0.0; MAX_PARAM_VALUES],
             params_len: 0,
+            decoded: [0.0; MAX_PARAM_VALUES],
+            decoded_len: 0,
+            shape_id: 0,
             wo,
             mode,
             finished: false,
@@ -147,7 +159,8 @@ impl Closure {
     /// runtime they come from) in the same order, the same enumerated
     /// choices and the same transport: lanes of such closures share batch kernels.
     pub fn same_shape(&self, other: &Closure) -> bool {
-        self.lobe_count == other.lobe_count
+        self.shape_id == other.shape_id
+            && self.lobe_count == other.lobe_count
             && self.mode == other.mode
             && (0..self.lobe_count).all(|k| {
                 let (a, b) = (&self.lobes[k], &other.lobes[k]);
@@ -158,6 +171,20 @@ impl Closure {
                         other.lobe_params(k),
                     )
             })
+    }
+
+    /// A hash of the closure's shape, equal for closures of the same shape (set by
+    /// `finish`): batches look shapes up by it, then confirm with `same_shape`.
+    pub fn shape_id(&self) -> u64 {
+        self.shape_id
+    }
+
+    /// The decoded parameter block of lobe `index`, as the `*_decoded` calls and the
+    /// batch kernels read it.
+    pub fn lobe_decoded(&self, index: usize) -> &[f32] {
+        let l = &self.lobes[index];
+        let start = l.decoded_start as usize;
+        &self.decoded[start..start + l.decoded_len as usize]
     }
 
     /// The parameter block of lobe `index`.
@@ -218,6 +245,15 @@ impl Closure {
                 format!("the closure's lobes hold at most {MAX_PARAM_VALUES} parameter values"),
             ));
         }
+        let decoded_size = lobe.decoded_len();
+        if self.decoded_len + decoded_size > MAX_PARAM_VALUES {
+            return Err(Error::new(
+                Status::ClosureFull,
+                format!(
+                    "the closure's lobes hold at most {MAX_PARAM_VALUES} decoded parameter values"
+                ),
+            ));
+        }
         let block = &mut self.params[self.params_len..self.params_len + size];
         match params {
             Some(values) => {
@@ -226,6 +262,10 @@ impl Closure {
             }
             None => params::write_defaults(specs, block),
         }
+        lobe.decode(
+            block,
+            &mut self.decoded[self.decoded_len..self.decoded_len + decoded_size],
+        );
         self.lobes[self.lobe_count] = LobeInstance {
             lobe: lobe.clone(),
             type_id,
@@ -233,9 +273,12 @@ impl Closure {
             frame,
             params_start: self.params_len as u16,
             params_len: size as u16,
+            decoded_start: self.decoded_len as u16,
+            decoded_len: decoded_size as u16,
             probability: 0.0,
         };
         self.params_len += size;
+        self.decoded_len += decoded_size;
         self.lobe_count += 1;
         Ok(self.lobe_count - 1)
     }
@@ -253,7 +296,7 @@ impl Closure {
             let wo = self
                 .wo
                 .map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
-            let albedo = l.lobe.albedo(self.lobe_params(k), wo, self.mode);
+            let albedo = l.lobe.albedo_decoded(self.lobe_decoded(k), wo, self.mode);
             shares[k] = (l.weight * albedo).luminance().max(0.0);
         }
         let n = self.lobe_count;
@@ -272,8 +315,24 @@ impl Closure {
         {
             lobe.probability = p;
         }
+        self.shape_id = self.hash_shape();
         self.finished = true;
         Ok(())
+    }
+
+    /// What `same_shape` compares, hashed: lobe type identities, enumerated choices,
+    /// transport.
+    fn hash_shape(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        (self.lobe_count, self.mode == Transport::Radiance).hash(&mut h);
+        for (k, l) in self.lobes().iter().enumerate() {
+            let identity = &*l.lobe as *const dyn crate::lobes::LobeType as *const () as usize;
+            (l.type_id, identity).hash(&mut h);
+            let specs = l.lobe.params();
+            params::for_each_choice(specs, self.lobe_params(k), |c| c.hash(&mut h));
+        }
+        h.finish()
     }
 
     pub(crate) fn check_finished(&self) -> Result<(), Error> {
@@ -303,8 +362,8 @@ impl Closure {
     /// `weight * f * |cos|` and the unconditional pdf of one lobe.
     fn eval_one(&self, k: usize, wo: Vec3<f32>, wi: Vec3<f32>) -> (Rgb<f32>, f32) {
         let l = &self.lobes[k];
-        let e = l.lobe.eval(
-            self.lobe_params(k),
+        let e = l.lobe.eval_decoded(
+            self.lobe_decoded(k),
             l.frame.to_local(wo),
             l.frame.to_local(wi),
             self.mode,
@@ -312,18 +371,17 @@ impl Closure {
         (l.weight * e.value, e.pdf)
     }
 
-    /// [`Self::eval_one`] and lobe `k`'s reverse pdf, decoding its parameters once.
-    fn eval_one_with_reverse(&self, k: usize, wo: Vec3<f32>, wi: Vec3<f32>) -> EvalResult {
-        let l = &self.lobes[k];
-        let (e, pdf_reverse) = l.lobe.eval_with_reverse(
-            self.lobe_params(k),
-            l.frame.to_local(wo),
-            l.frame.to_local(wi),
-            self.mode,
-        );
+    /// [`Self::eval_one`] and, with `reverse`, lobe `k`'s reverse pdf (else 0).
+    fn eval_one_with(&self, k: usize, wo: Vec3<f32>, wi: Vec3<f32>, reverse: bool) -> EvalResult {
+        let (value, pdf) = self.eval_one(k, wo, wi);
+        let pdf_reverse = if reverse {
+            self.eval_one(k, wi, wo).1
+        } else {
+            0.0
+        };
         EvalResult {
-            value: l.weight * e.value,
-            pdf: e.pdf,
+            value,
+            pdf,
             pdf_reverse,
         }
     }
@@ -343,8 +401,19 @@ impl Closure {
         self.mixture(wo, wi).1
     }
 
-    /// The whole closure at `(wo, wi)` (unit vectors, world space).
+    /// The whole closure at `(wo, wi)` (unit vectors, world space), with the reverse
+    /// pdf (each lobe is evaluated twice).
     pub fn eval(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<EvalResult, Error> {
+        self.eval_with(wo, wi, true)
+    }
+
+    /// [`Self::eval`] without the reverse pdf (`pdf_reverse` is 0): one evaluation
+    /// per lobe, for unidirectional hosts.
+    pub fn eval_forward(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> Result<EvalResult, Error> {
+        self.eval_with(wo, wi, false)
+    }
+
+    fn eval_with(&self, wo: Vec3<f32>, wi: Vec3<f32>, reverse: bool) -> Result<EvalResult, Error> {
         self.check_finished()?;
         let mut sum = EvalResult {
             value: Rgb::zero(),
@@ -352,7 +421,7 @@ impl Closure {
             pdf_reverse: 0.0,
         };
         for (k, l) in self.lobes().iter().enumerate() {
-            let e = self.eval_one_with_reverse(k, wo, wi);
+            let e = self.eval_one_with(k, wo, wi, reverse);
             sum.value = sum.value + e.value;
             sum.pdf += l.probability * e.pdf;
             sum.pdf_reverse += l.probability * e.pdf_reverse;
@@ -376,7 +445,7 @@ impl Closure {
             .fold(Rgb::zero(), |acc, (k, l)| {
                 acc + l.weight
                     * l.lobe
-                        .albedo(self.lobe_params(k), l.frame.to_local(wo), self.mode)
+                        .albedo_decoded(self.lobe_decoded(k), l.frame.to_local(wo), self.mode)
             }))
     }
 
@@ -426,7 +495,7 @@ impl Closure {
         // `wi` (`LobeType::sample_world`); the other lobes are evaluated there.
         let s = l
             .lobe
-            .sample_world(self.lobe_params(k), &l.frame, wo, u, self.mode);
+            .sample_world(self.lobe_decoded(k), &l.frame, wo, u, self.mode);
         if !s.valid {
             return Err(no_sample());
         }
@@ -469,7 +538,18 @@ impl Closure {
         wi: Vec3<f32>,
     ) -> Result<EvalResult, Error> {
         self.check_lobe(index)?;
-        Ok(self.eval_one_with_reverse(index, wo, wi))
+        Ok(self.eval_one_with(index, wo, wi, true))
+    }
+
+    /// [`Self::eval_lobe`] without the reverse pdf (`pdf_reverse` is 0).
+    pub fn eval_lobe_forward(
+        &self,
+        index: usize,
+        wo: Vec3<f32>,
+        wi: Vec3<f32>,
+    ) -> Result<EvalResult, Error> {
+        self.check_lobe(index)?;
+        Ok(self.eval_one_with(index, wo, wi, false))
     }
 
     /// The pdf of lobe `index` alone.
@@ -483,7 +563,7 @@ impl Closure {
         let l = self.check_lobe(index)?;
         Ok(l.weight
             * l.lobe
-                .albedo(self.lobe_params(index), l.frame.to_local(wo), self.mode))
+                .albedo_decoded(self.lobe_decoded(index), l.frame.to_local(wo), self.mode))
     }
 }
 

@@ -540,7 +540,9 @@ unsafe fn out_rgb<'a>(out: *mut f32) -> Result<&'a mut [f32; 3], Error> {
 }
 
 /// The closure at `(wo, wi)`: `sum_k weight_k f_k |cos theta_i|`, the mixture pdf
-/// and the reverse pdf. Directions are world space and need not be normalized.
+/// and the reverse pdf (for bidirectional hosts; it evaluates every lobe twice, so
+/// unidirectional hosts call `glint_eval_forward`). Directions are world space and
+/// need not be normalized.
 ///
 /// # Safety
 /// `closure` NULL or live; `out` NULL or writable with `struct_size` set.
@@ -551,12 +553,48 @@ pub unsafe extern "C" fn glint_eval(
     wi: glint_vec3,
     out: *mut glint_eval_result,
 ) -> glint_status {
+    // SAFETY: per the contract.
+    unsafe { eval_call(closure, wo, wi, out, Closure::eval) }
+}
+
+/// `glint_eval` without the reverse pdf: value and pdf only, each lobe evaluated
+/// once; `out->pdf_reverse` is set to 0.
+///
+/// # Safety
+/// As `glint_eval`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_eval_forward(
+    closure: *const glint_closure,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut glint_eval_result,
+) -> glint_status {
+    // SAFETY: per the contract.
+    unsafe { eval_call(closure, wo, wi, out, Closure::eval_forward) }
+}
+
+/// `Closure::eval` or `Closure::eval_forward`.
+type ClosureEval = fn(&Closure, Vec3<f32>, Vec3<f32>) -> Result<EvalResult, Error>;
+/// `Closure::eval_lobe` or `Closure::eval_lobe_forward`.
+type LobeEval = fn(&Closure, usize, Vec3<f32>, Vec3<f32>) -> Result<EvalResult, Error>;
+
+/// The body of `glint_eval` and `glint_eval_forward`.
+///
+/// # Safety
+/// As `glint_eval`.
+unsafe fn eval_call(
+    closure: *const glint_closure,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut glint_eval_result,
+    eval: ClosureEval,
+) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
         // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
-        write_eval(out, c.eval(vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?);
+        write_eval(out, eval(c, vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?);
         Ok(())
     })
 }
@@ -640,15 +678,45 @@ pub unsafe extern "C" fn glint_eval_lobe(
     wi: glint_vec3,
     out: *mut glint_eval_result,
 ) -> glint_status {
+    // SAFETY: per the contract.
+    unsafe { eval_lobe_call(closure, lobe, wo, wi, out, Closure::eval_lobe) }
+}
+
+/// `glint_eval_lobe` without the reverse pdf (`out->pdf_reverse` is set to 0).
+///
+/// # Safety
+/// As `glint_eval`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_eval_lobe_forward(
+    closure: *const glint_closure,
+    lobe: u32,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut glint_eval_result,
+) -> glint_status {
+    // SAFETY: per the contract.
+    unsafe { eval_lobe_call(closure, lobe, wo, wi, out, Closure::eval_lobe_forward) }
+}
+
+/// The body of `glint_eval_lobe` and `glint_eval_lobe_forward`.
+///
+/// # Safety
+/// As `glint_eval`.
+unsafe fn eval_lobe_call(
+    closure: *const glint_closure,
+    lobe: u32,
+    wo: glint_vec3,
+    wi: glint_vec3,
+    out: *mut glint_eval_result,
+    eval: LobeEval,
+) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
         // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
-        write_eval(
-            out,
-            c.eval_lobe(lobe as usize, vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?,
-        );
+        let (wo, wi) = (vec3_in(wo, "wo")?, vec3_in(wi, "wi")?);
+        write_eval(out, eval(c, lobe as usize, wo, wi)?);
         Ok(())
     })
 }
