@@ -1086,12 +1086,8 @@ fn finish_lane(
         roughness: s.roughness[j],
     };
     let row = |rows: &[Vec<f32>; 3]| Rgb::new(rows[0][j], rows[1][j], rows[2][j]);
-    // Delta events are not in the other lobes' eval: the chosen lobe's alone.
-    let (value, pdf) = if delta {
-        (row(&s.sample_value), probability * s.sample_pdf[j])
-    } else {
-        (row(&s.value), s.pdf[j])
-    };
+    let own = (row(&s.sample_value), s.sample_pdf[j]);
+    let (value, pdf) = mixture::sampled(delta, own, probability, || (row(&s.value), s.pdf[j]));
     let c = mixture::finish(&sampled, value, pdf);
     SampleResult {
         wi: c.wi,

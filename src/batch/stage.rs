@@ -486,28 +486,9 @@ impl Scratch {
         reserve(&mut lobe.frame, 9 * len)?;
         reserve(&mut lobe.weight, 3 * len)?;
         reserve(&mut lobe.probability, len)?;
-        for rows in [
-            &mut self.wo,
-            &mut self.wi,
-            &mut self.u,
-            &mut self.value,
-            &mut self.sample_value,
-        ] {
-            for row in rows {
-                reserve(row, len)?;
-            }
-        }
-        for row in [
-            &mut self.pdf,
-            &mut self.pdf_reverse,
-            &mut self.sample_pdf,
-            &mut self.eta,
-            &mut self.roughness,
-        ] {
-            reserve(row, len)?;
-        }
+        self.reserve_rows(len)?;
+        reserve(&mut self.pdf_reverse, len)?;
         reserve(&mut self.failed, len)?;
-        reserve(&mut self.events, len)?;
         reserve(&mut self.flags, len)?;
         reserve(&mut self.lobe_index, len)?;
         for row in rows3(&mut self.value, len) {

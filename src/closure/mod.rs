@@ -502,15 +502,16 @@ impl Closure {
         let wi = s.wi;
         let own = (l.weight * s.value, s.pdf);
         let (value, pdf) = match mixture {
-            Some(p) if s.delta => (own.0, p * own.1),
             // Summed in lobe order, as `eval` sums them.
-            Some(_) => (0..self.lobe_count).fold((Rgb::zero(), 0.0), |(value, pdf), j| {
-                let (v, q) = if j == k {
-                    own
-                } else {
-                    self.eval_one(j, wo, wi)
-                };
-                (value + v, pdf + self.lobes[j].probability * q)
+            Some(p) => mixture::sampled(s.delta, own, p, || {
+                (0..self.lobe_count).fold((Rgb::zero(), 0.0), |(value, pdf), j| {
+                    let (v, q) = if j == k {
+                        own
+                    } else {
+                        self.eval_one(j, wo, wi)
+                    };
+                    (value + v, pdf + self.lobes[j].probability * q)
+                })
             }),
             None => own,
         };

@@ -51,6 +51,29 @@ pub fn choose<L: Lane>(probabilities: &[f32], u: L) -> Option<(L, L)> {
     Some((index, clamp_random((u - start) / width)))
 }
 
+/// The closure's value and pdf at a sample of a lobe chosen with probability `p`,
+/// whose own value and pdf are `own`: delta events carry the lobe's own value and `p`
+/// times its discrete probability (no other lobe has them); other events the
+/// mixture's value and pdf at the sampled direction, `mixture()` (run only when some
+/// lane needs it).
+#[inline(always)]
+pub fn sampled<L: Lane>(
+    delta: L::Mask,
+    own: (Rgb<L>, L),
+    p: L,
+    mixture: impl FnOnce() -> (Rgb<L>, L),
+) -> (Rgb<L>, L) {
+    let own = (own.0, p * own.1);
+    if delta.all() {
+        return own;
+    }
+    let (value, pdf) = mixture();
+    (
+        Rgb::select(delta, own.0, value),
+        L::select(delta, own.1, pdf),
+    )
+}
+
 /// A closure's sample as the caller receives it; failed lanes hold zeros (`eta` 1).
 #[derive(Clone, Copy, Debug)]
 pub struct ClosureSample<L: Lane> {

@@ -214,9 +214,13 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
             eta: load(job.eta, i, n, 1.0),
             roughness: load(job.roughness, i, n, 0.0),
         };
-        // Delta events are not in the other lobes' eval: the chosen lobe's alone.
-        let value = Rgb::select(delta, own_value, load_rgb(job.value, i, n));
-        let pdf = L::select(delta, probability * own_pdf, load(job.pdf, i, n, 0.0));
+        let (value, pdf) = mixture::sampled(
+            delta,
+            (own_value, own_pdf),
+            probability,
+            #[inline(always)]
+            || (load_rgb(job.value, i, n), load(job.pdf, i, n, 0.0)),
+        );
         let c = mixture::finish(&s, value, pdf);
         let out = &mut job.out;
         for (v, row) in [c.wi.x, c.wi.y, c.wi.z].into_iter().zip(out.wi.iter_mut()) {
