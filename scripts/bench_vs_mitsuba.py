@@ -134,7 +134,11 @@ class Glint:
         loop = ctypes.CDLL(str(LOOP_LIB))
         loop.glint_bench_loop.restype = ctypes.c_double
         loop.glint_bench_loop.argtypes = [VOIDP, VOIDP, ctypes.c_int32]
+        loop.glint_bench_stream.restype = ctypes.c_double
+        loop.glint_bench_stream.argtypes = [ctypes.POINTER(F32P), ctypes.POINTER(F32P),
+                                            ctypes.c_size_t, ctypes.c_int32]
         self.loop = loop.glint_bench_loop
+        self.stream = loop.glint_bench_stream
 
     def check(self, status, what):
         if status:
@@ -194,6 +198,17 @@ class GlintBatch:
         if t < 0:
             self.glint.check(int(-t), self.op)
         return t
+
+
+def streaming_bound(glint, n, repeats, np):
+    """M lanes/s of one thread streaming the bytes an n-lane eval moves (6 arrays read,
+    4 written), timed in C: the eval's memory-bandwidth bound."""
+    d = inputs(n, False, np)
+    ins = (F32P * 6)(*map(ptr, d["wo"] + d["wi"]))
+    outs_np = [np.empty(n, np.float32) for _ in range(4)]
+    outs = (F32P * 4)(*map(ptr, outs_np))
+    glint.stream(ins, outs, n, 1)
+    return rate(n, statistics.median(glint.stream(ins, outs, n, 1) for _ in range(repeats)))
 
 
 def median_c(batch, inner, repeats):
@@ -493,6 +508,7 @@ def main():
     mits = Mitsuba(mi, dr)
 
     rows, misses = benchmark(args, glint, runtimes, mits, cases, np)
+    bound = streaming_bound(glint, 1 << 20, 15, np)
     checks = correctness(glint, runtimes, mits, cases, args.cases, np)
 
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
@@ -509,6 +525,9 @@ def main():
         + (f" WARNING: {misses} measured Mitsuba kernels missed the cache." if misses else ""),
         "",
         *table(rows),
+        "",
+        f"Streaming bound (one thread, 1M lanes, the bytes a Glint eval moves: 6 arrays "
+        f"read, 4 written), measured in this run: {fmt(bound)} M lanes/s.",
         "",
         f"Correctness: eval value (f cos, RGB) and pdf on {CHECK_LANES} directions, relative "
         f"to Mitsuba; mean sample weight over {ALBEDO_LANES} lanes (a directional albedo "
