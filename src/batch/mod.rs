@@ -185,6 +185,9 @@ impl SplitLanes for Soa3Mut<'_> {
 
 impl Soa3<'_> {
     fn check(&self, count: usize, what: &str) -> Result<(), Error> {
+        if self.x.len() >= count && self.y.len() >= count && self.z.len() >= count {
+            return Ok(());
+        }
         for (len, axis) in [
             (self.x.len(), "x"),
             (self.y.len(), "y"),
@@ -303,7 +306,7 @@ pub fn eval<'a, C: ClosureSource<'a>>(
         pdf_reverse: out.pdf_reverse,
     };
     run_blocks(exec, n, out, |start, mut out| {
-        with_scratch(|s| eval_block(exec.kernels, input, wi, start, s, &mut out))
+        eval_block(exec.kernels, input, wi, start, &mut out)
     })
 }
 
@@ -323,7 +326,7 @@ pub fn pdf<'a, C: ClosureSource<'a>>(
         pdf_reverse: None,
     };
     run_blocks(exec, input.count, out, |start, mut out| {
-        with_scratch(|s| eval_block(exec.kernels, input, wi, start, s, &mut out))
+        eval_block(exec.kernels, input, wi, start, &mut out)
     })
 }
 
@@ -361,18 +364,21 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     input: &BatchInput<'a, C>,
     wi: Soa3<'_>,
     start: usize,
-    s: &mut Scratch,
     out: &mut EvalBlockOutput<'_>,
 ) -> Result<(), Error> {
     let end = (start + BLOCK).min(input.count);
-    let Some(closure) = in_place(input) else {
-        return eval_staged(kernels, input, wi, start..end, start, s, out);
+    let staged = |range: Range<usize>, out: &mut EvalBlockOutput<'_>| {
+        with_scratch(|s| eval_staged(kernels, input, wi, range, start, s, out))
     };
+    let Some(closure) = in_place(input) else {
+        return staged(start..end, out);
+    };
+    // In place needs no scratch buffers: a chunk takes them only to be staged.
     in_chunks(start..end, |chunk| {
         if eval_in_place(kernels, closure, input.wo, wi, chunk.clone(), start, out) {
             Ok(())
         } else {
-            eval_staged(kernels, input, wi, chunk, start, s, out)
+            staged(chunk, out)
         }
     })
 }
@@ -695,18 +701,19 @@ pub fn albedo<'a, C: ClosureSource<'a>>(
     out.check(input.count, "albedo")?;
     let kernels = exec.kernels;
     run_blocks(exec, input.count, out, |start, mut out| {
-        with_scratch(|s| {
-            let end = (start + BLOCK).min(input.count);
-            let Some(closure) = in_place(input) else {
-                return albedo_staged(kernels, input, start..end, start, s, &mut out);
-            };
-            in_chunks(start..end, |chunk| {
-                if albedo_in_place(kernels, closure, input.wo, chunk.clone(), start, &mut out) {
-                    Ok(())
-                } else {
-                    albedo_staged(kernels, input, chunk, start, s, &mut out)
-                }
-            })
+        let end = (start + BLOCK).min(input.count);
+        let staged = |range: Range<usize>, out: &mut Soa3Mut<'_>| {
+            with_scratch(|s| albedo_staged(kernels, input, range, start, s, out))
+        };
+        let Some(closure) = in_place(input) else {
+            return staged(start..end, &mut out);
+        };
+        in_chunks(start..end, |chunk| {
+            if albedo_in_place(kernels, closure, input.wo, chunk.clone(), start, &mut out) {
+                Ok(())
+            } else {
+                staged(chunk, &mut out)
+            }
         })
     })
 }
