@@ -131,6 +131,65 @@ impl<L: Lane> Distribution<L> {
         zi.safe_div(denom)
     }
 
+    /// The `wo`-side terms of a microfacet eval, computed once per `wo` (eval, and
+    /// sample before its direction is known): see [`View`].
+    #[inline(always)]
+    pub fn view(&self, wo: Vec3<L>) -> View<L> {
+        let z = wo.z.abs();
+        let sigma = self.sigma(wo, z);
+        View {
+            z,
+            sigma,
+            b: z + sigma,
+        }
+    }
+
+    /// `sigma(w) = |w.z| + 2 Lambda(w) |w.z| = |w.z| (1 + 2 Lambda(w))`, positive and
+    /// without cancellation. GGX: `2 Lambda |z| = sqrt(z^2 + p^2) - |z|` (Heitz 2014
+    /// eq. 72 times `|z|`), so `sigma = sqrt(z^2 + p^2)` with
+    /// `p^2 = (alpha_x w.x)^2 + (alpha_y w.y)^2`: one sqrt, no division. For a unit `w`,
+    /// `sigma >= min(1, alpha_x, alpha_y) >= MIN_ALPHA`.
+    #[inline(always)]
+    fn sigma(&self, w: Vec3<L>, z: L) -> L {
+        match self.kind {
+            NdfKind::Ggx => {
+                let proj2 = (self.alpha_x * w.x).sqr() + (self.alpha_y * w.y).sqr();
+                (z * z + proj2).sqrt()
+            }
+            NdfKind::Beckmann => z + L::splat(2.0) * self.lambda_cos(w),
+        }
+    }
+
+    /// The microfacet terms of a pair (`v` = [`Self::view`] of `wo`, unit half vector
+    /// `h`, `wi`), as `(P, rho)` with
+    /// - `P = G1(wo) D(h) / |cos_o| = 2 D(h) / B`, `B = |cos_o| + sigma_o`
+    ///   (`G1 = 1 / (1 + Lambda)` = `2 |z| / (|z| + sigma)`), so the VNDF reflection pdf
+    ///   `D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 cos_o)` (Heitz 2018 eq. 17) is `P / 4`;
+    /// - `rho = G2(wo, wi) / G1(wo) = B |cos_i| / A`, `A = |cos_i| sigma_o + |cos_o| sigma_i`,
+    ///   from the height-correlated `G2 = 1 / (1 + Lambda_o + Lambda_i)` (Heitz 2014
+    ///   eq. 99) multiplied out by `|cos_o cos_i|`: `G2 / |cos_o| = 2 |cos_i| / A`.
+    ///
+    /// so that `D G2 / |cos_o| = P rho`. GGX: `D = 1 / (pi ax ay t^2)` with `t = (h.x /
+    /// ax)^2 + (h.y / ay)^2 + h.z^2 = q / (ax ay)^2`, `q = (h.x ay)^2 + (h.y ax)^2 + (h.z ax
+    /// ay)^2`, so `P = 2 (ax ay)^3 / (pi q^2 B)`: one division. `q >= 1e-14` for a unit `h`
+    /// on non-delta lanes and `B >= MIN_ALPHA`, so that denominator is a positive normal
+    /// float; `A` may underflow at denormal cosines: the lanes where `A > 0` are returned.
+    #[inline(always)]
+    pub fn pair(&self, v: &View<L>, h: Vec3<L>, wi: Vec3<L>) -> (L, L, L::Mask) {
+        let (ax, ay) = (self.alpha_x, self.alpha_y);
+        let zi = wi.z.abs();
+        let a = zi * v.sigma + v.z * self.sigma(wi, zi);
+        let p = match self.kind {
+            NdfKind::Ggx => {
+                let axy = ax * ay;
+                let q = (h.x * ay).sqr() + (h.y * ax).sqr() + (h.z * axy).sqr();
+                L::splat(2.0) * (axy * axy * axy) / (L::splat(PI) * q * q * v.b)
+            }
+            NdfKind::Beckmann => L::splat(2.0) * self.d(h) / v.b,
+        };
+        (p, v.b * zi / a, a.gt(L::zero()))
+    }
+
     /// Density of visible normals `D_w(m) = G1(w) |w.m| D(m) / |w.z|` (Heitz 2014 eq. 38),
     /// through [`Self::g1_over_cos`] so that it stays finite at grazing `w`.
     #[inline(always)]
@@ -202,6 +261,15 @@ impl<L: Lane> Distribution<L> {
         let ry = sin_phi * sx + cos_phi * sy;
         Vec3::new(-rx * ax, -ry * ay, L::one()).normalize()
     }
+}
+
+/// The `wo`-side terms of a microfacet eval ([`Distribution::view`]): `|cos_o|`,
+/// `sigma_o = |cos_o| (1 + 2 Lambda(wo))` and `B = |cos_o| + sigma_o = 2 |cos_o| / G1(wo)`.
+#[derive(Clone, Copy, Debug)]
+pub struct View<L> {
+    pub z: L,
+    pub sigma: L,
+    pub b: L,
 }
 
 /// Slopes of visible normals of the unit-roughness Beckmann distribution seen at
