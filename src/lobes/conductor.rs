@@ -104,17 +104,29 @@ impl Model for Conductor {
         0.02 + 0.04 * params[ANISOTROPIC].powi(6)
     }
 
+    /// The distribution, `alpha_x`, `alpha_y`, the roughness, then the decoded Fresnel
+    /// group (`fresnel_params::decode`).
+    const DECODED_LEN: usize = 4 + fresnel_params::DECODED_LEN;
+
+    fn decode(params: &[f32], out: &mut [f32]) {
+        let roughness = params[ROUGHNESS];
+        let kind = params[DISTRIBUTION];
+        let dist =
+            Distribution::from_roughness(ndf_kind(kind as usize), roughness, params[ANISOTROPIC]);
+        out[..4].copy_from_slice(&[kind, dist.alpha_x, dist.alpha_y, roughness]);
+        fresnel_params::decode(params, FRESNEL, &mut out[4..]);
+    }
+
     #[inline(always)]
-    fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
-        let roughness = params.float(ROUGHNESS);
+    fn prepare<L: Lane>(decoded: Params<'_, L>) -> Prepared<L> {
         Prepared {
-            dist: Distribution::from_roughness(
-                ndf_kind(params.choice(DISTRIBUTION)),
-                roughness,
-                params.float(ANISOTROPIC),
-            ),
-            fresnel: fresnel_params::decode(&params, FRESNEL),
-            roughness,
+            dist: Distribution {
+                kind: ndf_kind(decoded.choice(0)),
+                alpha_x: decoded.float(1),
+                alpha_y: decoded.float(2),
+            },
+            fresnel: fresnel_params::read(&decoded, 4),
+            roughness: decoded.float(3),
         }
     }
 

@@ -32,19 +32,35 @@ macro_rules! with_fresnel_params {
 }
 pub(crate) use with_fresnel_params;
 
-/// Decode the Fresnel group starting at block offset `at`.
+/// Values of the decoded Fresnel group ([`decode`]): the model (0 Schlick, 1
+/// conductor), then `f0`, `f90` or `eta`, `k`.
+pub const DECODED_LEN: usize = 7;
+
+/// Decode the Fresnel group starting at raw block offset `at` into `out`
+/// ([`DECODED_LEN`] values), once: Gulbrandsen's artistic parameters become the
+/// complex IOR they stand for.
+pub fn decode(params: &[f32], at: usize, out: &mut [f32]) {
+    let raw = Params::<f32>::new(params);
+    let rgb = |i: usize| raw.rgb(at + 1 + 3 * i);
+    let (model, a, b) = match raw.choice(at) {
+        0 => (0.0, rgb(0), rgb(1)),
+        1 => (1.0, rgb(2), rgb(3)),
+        _ => match FresnelModel::artistic(rgb(4), rgb(5)) {
+            FresnelModel::Conductor { eta, k } => (1.0, eta, k),
+            FresnelModel::Schlick { f0, f90 } => (0.0, f0, f90),
+        },
+    };
+    out[0] = model;
+    out[1..4].copy_from_slice(&a.to_array());
+    out[4..7].copy_from_slice(&b.to_array());
+}
+
+/// Read the decoded Fresnel group at decoded block offset `at`.
 #[inline(always)]
-pub fn decode<L: Lane>(params: &Params<'_, L>, at: usize) -> FresnelModel<L> {
-    let rgb = |i: usize| params.rgb(at + 1 + 3 * i);
-    match params.choice(at) {
-        0 => FresnelModel::Schlick {
-            f0: rgb(0),
-            f90: rgb(1),
-        },
-        1 => FresnelModel::Conductor {
-            eta: rgb(2),
-            k: rgb(3),
-        },
-        _ => FresnelModel::artistic(rgb(4), rgb(5)),
+pub fn read<L: Lane>(decoded: &Params<'_, L>, at: usize) -> FresnelModel<L> {
+    let (a, b) = (decoded.rgb(at + 1), decoded.rgb(at + 4));
+    match decoded.choice(at) {
+        0 => FresnelModel::Schlick { f0: a, f90: b },
+        _ => FresnelModel::Conductor { eta: a, k: b },
     }
 }

@@ -46,10 +46,16 @@ impl Model for Mirror {
         1e-5
     }
 
+    const DECODED_LEN: usize = fresnel_params::DECODED_LEN;
+
+    fn decode(params: &[f32], out: &mut [f32]) {
+        fresnel_params::decode(params, FRESNEL, out);
+    }
+
     #[inline(always)]
-    fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
+    fn prepare<L: Lane>(decoded: Params<'_, L>) -> Prepared<L> {
         Prepared {
-            fresnel: fresnel_params::decode(&params, FRESNEL),
+            fresnel: fresnel_params::read(&decoded, 0),
         }
     }
 
