@@ -373,15 +373,24 @@ impl Closure {
 
     /// [`Self::eval_one`] and, with `reverse`, lobe `k`'s reverse pdf (else 0).
     fn eval_one_with(&self, k: usize, wo: Vec3<f32>, wi: Vec3<f32>, reverse: bool) -> EvalResult {
-        let (value, pdf) = self.eval_one(k, wo, wi);
-        let pdf_reverse = if reverse {
-            self.eval_one(k, wi, wo).1
-        } else {
-            0.0
-        };
+        if !reverse {
+            let (value, pdf) = self.eval_one(k, wo, wi);
+            return EvalResult {
+                value,
+                pdf,
+                pdf_reverse: 0.0,
+            };
+        }
+        let l = &self.lobes[k];
+        let (e, pdf_reverse) = l.lobe.eval_decoded_with_reverse(
+            self.lobe_decoded(k),
+            l.frame.to_local(wo),
+            l.frame.to_local(wi),
+            self.mode,
+        );
         EvalResult {
-            value,
-            pdf,
+            value: l.weight * e.value,
+            pdf: e.pdf,
             pdf_reverse,
         }
     }
@@ -413,7 +422,14 @@ impl Closure {
         self.eval_with(wo, wi, false)
     }
 
-    fn eval_with(&self, wo: Vec3<f32>, wi: Vec3<f32>, reverse: bool) -> Result<EvalResult, Error> {
+    /// [`Self::eval`] (`reverse`) or [`Self::eval_forward`].
+    #[inline]
+    pub fn eval_with(
+        &self,
+        wo: Vec3<f32>,
+        wi: Vec3<f32>,
+        reverse: bool,
+    ) -> Result<EvalResult, Error> {
         self.check_finished()?;
         let mut sum = EvalResult {
             value: Rgb::zero(),

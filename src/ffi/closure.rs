@@ -554,7 +554,7 @@ pub unsafe extern "C" fn glint_eval(
     out: *mut glint_eval_result,
 ) -> glint_status {
     // SAFETY: per the contract.
-    unsafe { eval_call(closure, wo, wi, out, Closure::eval) }
+    unsafe { eval_call(closure, wo, wi, out, true) }
 }
 
 /// `glint_eval` without the reverse pdf: value and pdf only, each lobe evaluated
@@ -570,15 +570,13 @@ pub unsafe extern "C" fn glint_eval_forward(
     out: *mut glint_eval_result,
 ) -> glint_status {
     // SAFETY: per the contract.
-    unsafe { eval_call(closure, wo, wi, out, Closure::eval_forward) }
+    unsafe { eval_call(closure, wo, wi, out, false) }
 }
 
-/// `Closure::eval` or `Closure::eval_forward`.
-type ClosureEval = fn(&Closure, Vec3<f32>, Vec3<f32>) -> Result<EvalResult, Error>;
 /// `Closure::eval_lobe` or `Closure::eval_lobe_forward`.
 type LobeEval = fn(&Closure, usize, Vec3<f32>, Vec3<f32>) -> Result<EvalResult, Error>;
 
-/// The body of `glint_eval` and `glint_eval_forward`.
+/// The body of `glint_eval` and `glint_eval_forward` (`reverse` false).
 ///
 /// # Safety
 /// As `glint_eval`.
@@ -587,14 +585,15 @@ unsafe fn eval_call(
     wo: glint_vec3,
     wi: glint_vec3,
     out: *mut glint_eval_result,
-    eval: ClosureEval,
+    reverse: bool,
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
         let out = unsafe { out_struct(out, "result") }?;
         // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
-        write_eval(out, eval(c, vec3_in(wo, "wo")?, vec3_in(wi, "wi")?)?);
+        let (wo, wi) = (vec3_in(wo, "wo")?, vec3_in(wi, "wi")?);
+        write_eval(out, c.eval_with(wo, wi, reverse)?);
         Ok(())
     })
 }

@@ -343,18 +343,18 @@ pub trait LobeType: Send + Sync {
         self.albedo(decoded, wo, mode)
     }
 
-    /// `eval(wo, wi)` and the reverse pdf `eval(wi, wo).pdf` (built-in lobes decode
-    /// their parameters once for both).
-    fn eval_with_reverse(
+    /// `eval_decoded(wo, wi)` and the reverse pdf `eval_decoded(wi, wo).pdf` (built-in
+    /// lobes read the block once for both).
+    fn eval_decoded_with_reverse(
         &self,
-        params: &[f32],
+        decoded: &[f32],
         wo: Vec3<f32>,
         wi: Vec3<f32>,
         mode: Transport,
     ) -> (Eval<f32>, f32) {
         (
-            self.eval(params, wo, wi, mode),
-            self.eval(params, wi, wo, mode).pdf,
+            self.eval_decoded(decoded, wo, wi, mode),
+            self.eval_decoded(decoded, wi, wo, mode).pdf,
         )
     }
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32>;
@@ -437,15 +437,14 @@ impl<M: Model> LobeType for Builtin<M> {
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         self.eval_decoded(&decoded::<M>(params), wo, wi, mode)
     }
-    fn eval_with_reverse(
+    fn eval_decoded_with_reverse(
         &self,
-        params: &[f32],
+        decoded: &[f32],
         wo: Vec3<f32>,
         wi: Vec3<f32>,
         mode: Transport,
     ) -> (Eval<f32>, f32) {
-        let d = decoded::<M>(params);
-        let p = M::prepare(Params::new(&d));
+        let p = M::prepare(Params::new(decoded));
         (M::eval(&p, wo, wi, mode), M::eval(&p, wi, wo, mode).pdf)
     }
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32> {
