@@ -26,7 +26,7 @@ use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, flags};
 use crate::albedo_table::DielectricTable;
 use crate::fresnel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
-use crate::microfacet::Distribution;
+use crate::microfacet::{Distribution, View};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct Dielectric;
@@ -82,39 +82,84 @@ fn transmission_scale<L: Lane>(etap: L, mode: Transport) -> L {
 
 impl Dielectric {
     /// Value (cosine included) and pdf of the rough interface for a pair whose
-    /// generalized half vector is `wm` (Walter eqs. 20, 21 and the Jacobians 14, 17).
+    /// generalized half vector is `wm` (Walter eqs. 20, 21 and the Jacobians 14, 17),
+    /// from the `wo` side `v` ([`Distribution::view`]), and the lanes where the
+    /// microfacet terms are defined. With `P = G1(wo) D / |cos_o|` and `rho = G2 / G1`
+    /// of [`Distribution::pair`] (Heitz 2014 eqs. 38, 99; Heitz 2018 eq. 17):
+    /// reflection `pdf = F P / 4`, `value = pdf rho`; transmission `pdf = (1 - F) P
+    /// |wo.m| |wi.m| / (wi.m + wo.m / eta')^2`, `value = pdf rho / eta'^2` (radiance).
+    /// One `D`, one `Lambda` per direction, one division for `P` and one for `rho`.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn rough_eval<L: Lane>(
         p: &Prepared<L>,
+        v: &View<L>,
         wo: Vec3<L>,
         wi: Vec3<L>,
         wm: Vec3<L>,
         etap: L,
         reflect: L::Mask,
         mode: Transport,
-    ) -> (L, L) {
+    ) -> (L, L, L::Mask) {
         let (wo_m, wi_m) = (wo.dot(wm), wi.dot(wm));
         // sin^2(wo, wm) without cancellation: wo x (wi etap + wo) = etap (wo x wi).
         let sin2_om = (wo.cross(wi) * etap)
             .length_squared()
             .safe_div((wi * etap + wo).length_squared());
         let f = fresnel::dielectric_sin2(wo_m, sin2_om, p.eta);
-        let d = p.dist.d(wm);
-        // G2 / |cos_o| and G1 / |cos_o| stay finite at grazing wo, where both vanish.
-        let g = p.dist.g2_over_cos_o(wo, wi);
-        let g1 = p.dist.g1_over_cos(wo);
-        let refl_value = L::splat(0.25) * f * d * g;
-        // D_wo(m) F / (4 |wo.m|) with D_wo = G1 |wo.m| D / |cos_o|.
-        let refl_pdf = L::splat(0.25) * g1 * d * f;
+        // P and rho stay finite at grazing wo, where G1 and G2 vanish like cos_o.
+        let (pp, rho, pair_ok) = p.dist.pair(v, wm, wi);
+        let refl_pdf = L::splat(0.25) * pp * f;
+        let refl_value = refl_pdf * rho;
         let denom = (wi_m + wo_m / etap).sqr();
         let t = L::one() - f;
-        let trans_value =
-            (t * d * g * (wi_m * wo_m).abs()).safe_div(denom) * transmission_scale(etap, mode);
-        let trans_pdf = (p.dist.pdf_visible(wo, wm) * wi_m.abs() * t).safe_div(denom);
+        let trans_pdf = (pp * wo_m.abs() * wi_m.abs() * t).safe_div(denom);
+        let trans_value = trans_pdf * rho * transmission_scale(etap, mode);
         (
             L::select(reflect, refl_value, trans_value),
             L::select(reflect, refl_pdf, trans_pdf),
+            // D(m) is 0 for m.z <= 0, which pair does not test.
+            pair_ok & wm.z.gt(L::zero()),
         )
+    }
+
+    /// [`Model::eval`] given the `wo` side `v`: eval and sample both end here, so a
+    /// sample's value and pdf are eval's at its direction to the last bit.
+    #[inline(always)]
+    fn eval_from<L: Lane>(
+        p: &Prepared<L>,
+        v: &View<L>,
+        wo: Vec3<L>,
+        wi: Vec3<L>,
+        mode: Transport,
+    ) -> Eval<L> {
+        let (cos_o, cos_i) = (wo.z, wi.z);
+        let reflect = same_sign(cos_o, cos_i);
+        let etap = L::select(
+            reflect,
+            L::one(),
+            L::select(cos_o.gt(L::zero()), p.eta, L::one() / p.eta),
+        );
+        // Generalized half vector (Walter eq. 16), on the normal's side.
+        let wm_raw = wi * etap + wo;
+        let wm = wm_raw.normalize();
+        let wm = Vec3::select(wm.z.lt(L::zero()), -wm, wm);
+        // Discard back-facing microfacets (Walter §5.3).
+        let valid = !p.smooth
+            & cos_i.abs().gt(L::zero())
+            & cos_o.abs().gt(L::zero())
+            & wm_raw.length_squared().gt(L::zero())
+            & same_sign(wm.dot(wi), cos_i)
+            & same_sign(wm.dot(wo), cos_o);
+        if !valid.any() {
+            return Eval::zero();
+        }
+        let (value, pdf, ok) = Self::rough_eval(p, v, wo, wi, wm, etap, reflect, mode);
+        let valid = valid & ok;
+        Eval {
+            value: Rgb::splat(L::select(valid, value, L::zero())),
+            pdf: L::select(valid, pdf, L::zero()),
+        }
     }
 }
 
@@ -214,32 +259,10 @@ impl Model for Dielectric {
 
     #[inline(always)]
     fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L> {
-        let (cos_o, cos_i) = (wo.z, wi.z);
-        let reflect = same_sign(cos_o, cos_i);
-        let etap = L::select(
-            reflect,
-            L::one(),
-            L::select(cos_o.gt(L::zero()), p.eta, L::one() / p.eta),
-        );
-        // Generalized half vector (Walter eq. 16), on the normal's side.
-        let wm_raw = wi * etap + wo;
-        let wm = wm_raw.normalize();
-        let wm = Vec3::select(wm.z.lt(L::zero()), -wm, wm);
-        // Discard back-facing microfacets (Walter §5.3).
-        let valid = !p.smooth
-            & cos_i.abs().gt(L::zero())
-            & cos_o.abs().gt(L::zero())
-            & wm_raw.length_squared().gt(L::zero())
-            & same_sign(wm.dot(wi), cos_i)
-            & same_sign(wm.dot(wo), cos_o);
-        if !valid.any() {
+        if p.smooth.all() {
             return Eval::zero();
         }
-        let (value, pdf) = Self::rough_eval(p, wo, wi, wm, etap, reflect, mode);
-        Eval {
-            value: Rgb::splat(L::select(valid, value, L::zero())),
-            pdf: L::select(valid, pdf, L::zero()),
-        }
+        Self::eval_from(p, &p.dist.view(wo), wo, wi, mode)
     }
 
     #[inline(always)]
@@ -267,8 +290,13 @@ impl Model for Dielectric {
         let t_scale = transmission_scale(etap, mode);
         let smooth_value = L::select(reflect, f, (L::one() - f) * t_scale);
         let smooth_pdf = L::select(reflect, f, L::one() - f);
-        // Rough: value and pdf through eval, so both agree to the last bit.
-        let e = Self::eval(p, wo, wi, mode);
+        // Rough: value and pdf by eval's own finish at the settled wi (the wo side
+        // computed the same way), so both agree with eval to the last bit.
+        let e = if p.smooth.all() {
+            Eval::zero()
+        } else {
+            Self::eval_from(p, &p.dist.view(wo), wo, wi, mode)
+        };
         Sample {
             wi,
             value: Rgb::select(p.smooth, Rgb::splat(smooth_value), e.value),
@@ -292,5 +320,58 @@ impl Model for Dielectric {
         let rough = r + t * scale;
         let albedo = L::select(p.smooth, smooth, rough);
         Rgb::splat(L::select(cos_o.eq(L::zero()), L::zero(), albedo))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lobes::InPlace;
+    use crate::params::write_defaults;
+
+    /// A rough sample's value and pdf are `eval(wo, s.wi)` to the last bit, for random
+    /// parameters (both NDFs, eta on both sides of 1), both sides and both transports.
+    #[test]
+    fn sample_matches_eval_bitwise() {
+        let mut state = 0x1234_5677_u32;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut block = vec![0.0f32; crate::params::block_size(Dielectric::PARAMS)];
+        let mut checked = 0;
+        for i in 0..20000 {
+            write_defaults(Dielectric::PARAMS, &mut block);
+            block[DISTRIBUTION] = (i % 2) as f32;
+            block[ROUGHNESS] = 0.04 + 0.96 * rnd();
+            block[ANISOTROPIC] = rnd();
+            block[ETA] = [1.5, 0.7, 2.4, 1.33][i / 2 % 4];
+            let p = Dielectric::prepare(Params::new(&block));
+            let (ct, phi) = (rnd(), 2.0 * crate::math::PI * rnd());
+            let ct = if i % 3 == 0 { -ct } else { ct };
+            let st = (1.0 - ct * ct).max(0.0).sqrt();
+            let wo = Vec3::new(st * phi.cos(), st * phi.sin(), ct).normalize();
+            let mode = if i % 5 == 0 {
+                Transport::Importance
+            } else {
+                Transport::Radiance
+            };
+            let s = Dielectric::sample(&p, wo, rnd(), rnd(), rnd(), mode, &mut InPlace);
+            if !s.valid || s.delta {
+                continue;
+            }
+            let e = Dielectric::eval(&p, wo, s.wi, mode);
+            assert_eq!(s.pdf.to_bits(), e.pdf.to_bits(), "pdf at {wo:?} {:?}", s.wi);
+            assert_eq!(
+                s.value.r.to_bits(),
+                e.value.r.to_bits(),
+                "value at {wo:?} {:?}",
+                s.wi
+            );
+            checked += 1;
+        }
+        assert!(checked > 10000, "{checked} samples checked");
     }
 }
