@@ -44,21 +44,60 @@ pub fn dielectric_sin2<L: Lane>(cos_theta_i: L, sin2_i: L, eta: L) -> L {
 /// equations"), for `cos_theta` in [0, 1].
 #[inline(always)]
 pub fn conductor<L: Lane>(cos_theta: L, eta: L, k: L) -> L {
-    let cos = cos_theta.clamp(L::zero(), L::one());
-    let cos2 = cos * cos;
-    let sin2 = L::one() - cos2;
-    let eta2 = eta * eta;
-    let k2 = k * k;
-    let t0 = eta2 - k2 - sin2;
-    let a2_plus_b2 = (t0 * t0 + L::splat(4.0) * eta2 * k2).safe_sqrt();
-    let a = (L::splat(0.5) * (a2_plus_b2 + t0)).safe_sqrt();
-    let t1 = a2_plus_b2 + cos2;
-    let t2 = L::splat(2.0) * a * cos;
-    let rs = (t1 - t2).safe_div(t1 + t2);
-    let t3 = cos2 * a2_plus_b2 + sin2 * sin2;
-    let t4 = t2 * sin2;
-    let rp = rs * (t3 - t4).safe_div(t3 + t4);
-    (L::splat(0.5) * (rp + rs)).clamp(L::zero(), L::one())
+    conductor_with(cos_theta, &ConductorIor::new(eta, k))
+}
+
+/// The terms of [`conductor`] that depend on the IOR alone.
+pub struct ConductorIor<L> {
+    /// `eta^2 - k^2`.
+    diff: L,
+    /// `4 eta^2 k^2`.
+    cross: L,
+}
+
+impl<L: Lane> ConductorIor<L> {
+    #[inline(always)]
+    pub fn new(eta: L, k: L) -> Self {
+        let (eta2, k2) = (eta * eta, k * k);
+        ConductorIor {
+            diff: eta2 - k2,
+            cross: L::splat(4.0) * eta2 * k2,
+        }
+    }
+}
+
+/// [`conductor`] at `cos_theta` with the IOR's terms computed once.
+#[inline(always)]
+pub fn conductor_with<L: Lane>(cos_theta: L, ior: &ConductorIor<L>) -> L {
+    conductor_at([cos_theta], ior)[0]
+}
+
+/// [`conductor`] at `N` angles, written step by step over arrays so that the scalar
+/// instance vectorizes across the angles (a closure's albedo evaluates 14 of them
+/// per channel).
+#[inline(always)]
+pub fn conductor_at<L: Lane, const N: usize>(cos_theta: [L; N], ior: &ConductorIor<L>) -> [L; N] {
+    let cos = cos_theta.map(|c| c.clamp(L::zero(), L::one()));
+    let cos2 = cos.map(|c| c * c);
+    let sin2 = cos2.map(|c2| L::one() - c2);
+    let t0 = sin2.map(|s2| ior.diff - s2);
+    let a2_plus_b2 = t0.map(|t| (t * t + ior.cross).safe_sqrt());
+    let mut out = [L::zero(); N];
+    for j in 0..N {
+        let a = (L::splat(0.5) * (a2_plus_b2[j] + t0[j])).safe_sqrt();
+        let t1 = a2_plus_b2[j] + cos2[j];
+        let t2 = L::splat(2.0) * a * cos[j];
+        let t3 = cos2[j] * a2_plus_b2[j] + sin2[j] * sin2[j];
+        let t4 = t2 * sin2[j];
+        // With rs = (t1 - t2) / (t1 + t2) and rp = rs (t3 - t4) / (t3 + t4),
+        // (rs + rp) / 2 = rs t3 / (t3 + t4): one division. The product of the
+        // denominators cannot underflow: t1 + t2 >= cos^2 and t3 + t4 >= sin^4, so one
+        // is >= 1/4.
+        out[j] = ((t1 - t2) * t3)
+            .safe_div((t1 + t2) * (t3 + t4))
+            .clamp(L::zero(), L::one());
+    }
+    out
 }
 
 /// The largest reflectivity Gulbrandsen's mapping accepts: `n_max` and `k` diverge as

@@ -55,8 +55,14 @@ fn dielectric_block() -> (Block, Micro) {
 
 /// Lambert + conductor + dielectric (+ mirror), all in the identity frame.
 fn mixture(wo: Vec3<f32>, with_mirror: bool) -> Closure {
-    let registry = Registry::with_builtins();
     let mut c = Closure::new(Some(wo), Transport::Radiance);
+    fill_mixture(&mut c, with_mirror);
+    c
+}
+
+/// Add [`mixture`]'s lobes to the empty closure `c` and finish it.
+fn fill_mixture(c: &mut Closure, with_mirror: bool) {
+    let registry = Registry::with_builtins();
     let l = Block::defaults(lobe("lambert")).rgb("color", COLOR);
     let (cb, _, _) = conductor_block();
     let (db, _) = dielectric_block();
@@ -70,15 +76,14 @@ fn mixture(wo: Vec3<f32>, with_mirror: bool) -> Closure {
         )
         .unwrap()
     };
-    assert_eq!(add(&mut c, "lambert", W_LAMBERT, &l), 0);
-    assert_eq!(add(&mut c, "conductor", W_CONDUCTOR, &cb), 1);
-    assert_eq!(add(&mut c, "dielectric", W_DIELECTRIC, &db), 2);
+    assert_eq!(add(c, "lambert", W_LAMBERT, &l), 0);
+    assert_eq!(add(c, "conductor", W_CONDUCTOR, &cb), 1);
+    assert_eq!(add(c, "dielectric", W_DIELECTRIC, &db), 2);
     if with_mirror {
         let mb = Block::defaults(lobe("mirror"));
-        assert_eq!(add(&mut c, "mirror", W_MIRROR, &mb), 3);
+        assert_eq!(add(c, "mirror", W_MIRROR, &mb), 3);
     }
     c.finish().unwrap();
-    c
 }
 
 /// The f64 reference of each lobe of [`mixture`]: `(weight * f |cos_i|, pdf)`.
@@ -439,6 +444,63 @@ fn arena_capacity() {
     arena
         .alloc(Closure::new(None, Transport::Radiance))
         .unwrap();
+}
+
+/// Closures are sized to what they hold (the 16-slot record with two 512-float blocks
+/// was 5560 bytes), and a slot reused after a reset keeps its storage and nothing
+/// else: a closure built there, after a full 16-lobe one of another shape, evaluates,
+/// samples and hashes its shape bit for bit as one built fresh.
+#[test]
+fn recycled_slots_build_closures_like_fresh_ones() {
+    let size = std::mem::size_of::<Closure>();
+    assert!(size <= 128, "a closure record is {size} bytes");
+    let registry = Registry::with_builtins();
+    let wo = Vec3::new(0.3f32, -0.2, 0.9);
+    let wo = wo * (1.0 / wo.length_squared().sqrt());
+    let fresh = mixture(wo, true);
+    let mut arena = Arena::new(2).unwrap();
+    for _ in 0..2 {
+        let c = arena
+            .alloc(Closure::new(None, Transport::Importance))
+            .unwrap();
+        for _ in 0..MAX_LOBES {
+            c.add_lobe(
+                &registry,
+                id(&registry, "conductor"),
+                [1.0; 3],
+                Frame::IDENTITY,
+                None,
+            )
+            .unwrap();
+        }
+        c.finish().unwrap();
+    }
+    arena.reset();
+    assert!(arena.is_empty());
+    let mode = Transport::Radiance;
+    let c = arena
+        .alloc_with(
+            || panic!("the slot is recycled, not made"),
+            |c| c.restart(Some(wo), mode),
+        )
+        .unwrap();
+    assert!(!c.is_finished());
+    assert!(c.lobes().is_empty());
+    fill_mixture(c, true);
+    assert_eq!(c.shape_id(), fresh.shape_id());
+    assert!(c.same_shape(&fresh));
+    let mut rng = Rng::new(7);
+    for _ in 0..2000 {
+        let [x, y, z] = rng.u3().map(|v| 2.0 * v - 1.0);
+        let wi = Vec3::new(x, y, z + 1e-3);
+        let wi = wi * (1.0 / wi.length_squared().sqrt());
+        assert_eq!(c.eval(wo, wi).unwrap(), fresh.eval(wo, wi).unwrap());
+        let u = rng.u3();
+        assert_eq!(
+            c.sample(wo, u).map_err(|e| e.status),
+            fresh.sample(wo, u).map_err(|e| e.status)
+        );
+    }
 }
 
 #[test]

@@ -324,19 +324,27 @@ impl ReflectionTable {
         let (a, b) = (h[FRESNEL_NODES], h[FRESNEL_NODES + 1]);
         let sum = match fresnel {
             FresnelModel::Schlick { f0, f90 } => *f0 * a + *f90 * b,
-            FresnelModel::Conductor { .. } => {
-                let f0 = fresnel.eval(L::one());
-                let mut sum = f0 * a + Rgb::splat(b);
-                for (k, &hk) in h[..FRESNEL_NODES].iter().enumerate() {
-                    let c = L::splat(fresnel_node(k));
-                    let departure = fresnel.eval(c).zip(
-                        f0,
-                        #[inline(always)]
-                        |f, f0| f - fresnel::schlick(f0, L::one(), c),
-                    );
-                    sum = sum + departure * hk;
-                }
-                sum
+            FresnelModel::Conductor { eta, k } => {
+                // Channel by channel, all nodes at once: the scalar instance (closure
+                // building) vectorizes across the nodes.
+                let nodes: [L; FRESNEL_NODES + 1] = std::array::from_fn(|j| {
+                    L::splat(FRESNEL_NODE_COS.get(j).copied().unwrap_or(1.0))
+                });
+                let channel = |eta: L, k: L| {
+                    let f = fresnel::conductor_at(nodes, &fresnel::ConductorIor::new(eta, k));
+                    let f0 = f[FRESNEL_NODES];
+                    let mut sum = f0 * a + b;
+                    for j in 0..FRESNEL_NODES {
+                        let departure = f[j] - fresnel::schlick(f0, L::one(), nodes[j]);
+                        sum += departure * h[j];
+                    }
+                    sum
+                };
+                Rgb::new(
+                    channel(eta.r, k.r),
+                    channel(eta.g, k.g),
+                    channel(eta.b, k.b),
+                )
             }
         };
         sum.map(|v| v.max(L::zero()))
@@ -351,10 +359,21 @@ fn reflection_mu(i: usize) -> f32 {
 }
 
 /// Fresnel node `k`, `c_k = (k / FRESNEL_K)^2`.
-fn fresnel_node(k: usize) -> f32 {
+const fn fresnel_node(k: usize) -> f32 {
     let x = k as f32 / FRESNEL_K as f32;
     x * x
 }
+
+/// The Fresnel nodes `c_k` ([`fresnel_node`]), as the albedo reads them.
+const FRESNEL_NODE_COS: [f32; FRESNEL_NODES] = {
+    let mut c = [0.0; FRESNEL_NODES];
+    let mut k = 0;
+    while k < FRESNEL_NODES {
+        c[k] = fresnel_node(k);
+        k += 1;
+    }
+    c
+};
 
 /// `s (len + w) / (len (s + w))`: maps [0, len] onto [0, 1] with half its range within
 /// `w` of 0 (0 when `len = 0`).

@@ -8,14 +8,14 @@
 
 mod arena;
 
-pub use arena::Arena;
+pub use arena::{Arena, Recycle};
 
 use crate::error::{Error, Status};
 use crate::kernels::mixture;
 use crate::lobes::Transport;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params;
-use crate::registry::{BUILTINS, LobeRef, Registry};
+use crate::registry::{LobeRef, Registry};
 
 /// Most lobes a closure holds (`GLINT_MAX_LOBES`).
 pub const MAX_LOBES: usize = 16;
@@ -29,7 +29,7 @@ pub const MAX_PARAM_VALUES: usize = 512;
 /// shares stay far from overflow.
 pub const MAX_LOBE_WEIGHT: f32 = 1e16;
 
-/// One lobe of a closure.
+/// One lobe of a closure; its blocks are ranges of the closure's `values`.
 #[derive(Clone)]
 pub struct LobeInstance {
     pub lobe: LobeRef,
@@ -43,22 +43,6 @@ pub struct LobeInstance {
     /// Probability of choosing this lobe when sampling.
     pub probability: f32,
 }
-
-const EMPTY_LOBE: LobeInstance = LobeInstance {
-    lobe: LobeRef::Static(BUILTINS[0]),
-    type_id: 0,
-    weight: Rgb {
-        r: 0.0,
-        g: 0.0,
-        b: 0.0,
-    },
-    frame: Frame::IDENTITY,
-    params_start: 0,
-    params_len: 0,
-    decoded_start: 0,
-    decoded_len: 0,
-    probability: 0.0,
-};
 
 /// Value (cosine included), pdf and reverse pdf of a pair of directions.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,15 +93,16 @@ impl SampleResult {
     };
 }
 
-/// A weighted set of lobes.
+/// A weighted set of lobes, sized to what it holds: the lobes and their blocks live
+/// in two vectors whose storage an arena slot keeps across resets ([`Recycle`]).
 #[derive(Clone)]
 pub struct Closure {
-    lobes: [LobeInstance; MAX_LOBES],
-    lobe_count: usize,
-    params: [f32; MAX_PARAM_VALUES],
+    lobes: Vec<LobeInstance>,
+    /// Each lobe's raw parameter block followed by the same block decoded once
+    /// (`LobeType::decode`), as every call reads it.
+    values: Vec<f32>,
+    /// Raw and decoded values held, each bounded by [`MAX_PARAM_VALUES`].
     params_len: usize,
-    /// The lobes' blocks decoded once (`LobeType::decode`), as every call reads them.
-    decoded: [f32; MAX_PARAM_VALUES],
     decoded_len: usize,
     /// A hash of the shape ([`Self::same_shape`]), fixed by `finish`.
     shape_id: u64,
@@ -130,17 +115,22 @@ impl Closure {
     /// An empty closure; `wo` (unit, world space) fixes view-dependent choices.
     pub fn new(wo: Option<Vec3<f32>>, mode: Transport) -> Closure {
         Closure {
-            lobes: [EMPTY_LOBE; MAX_LOBES],
-            lobe_count: 0,
-            params: [0.0; MAX_PARAM_VALUES],
+            lobes: Vec::new(),
+            values: Vec::new(),
             params_len: 0,
-            decoded: [0.0; MAX_PARAM_VALUES],
             decoded_len: 0,
             shape_id: 0,
             wo,
             mode,
             finished: false,
         }
+    }
+
+    /// Make this an empty closure as [`Closure::new`] does, keeping the storage.
+    pub fn restart(&mut self, wo: Option<Vec3<f32>>, mode: Transport) {
+        self.recycle();
+        self.wo = wo;
+        self.mode = mode;
     }
 
     pub fn transport(&self) -> Transport {
@@ -152,7 +142,11 @@ impl Closure {
     }
 
     pub fn lobes(&self) -> &[LobeInstance] {
-        &self.lobes[..self.lobe_count]
+        &self.lobes
+    }
+
+    fn lobe_count(&self) -> usize {
+        self.lobes.len()
     }
 
     /// Whether `other` has the same lobe types (the same registered objects, whatever
@@ -160,9 +154,9 @@ impl Closure {
     /// choices and the same transport: lanes of such closures share batch kernels.
     pub fn same_shape(&self, other: &Closure) -> bool {
         self.shape_id == other.shape_id
-            && self.lobe_count == other.lobe_count
+            && self.lobes.len() == other.lobes.len()
             && self.mode == other.mode
-            && (0..self.lobe_count).all(|k| {
+            && (0..self.lobe_count()).all(|k| {
                 let (a, b) = (&self.lobes[k], &other.lobes[k]);
                 same_lobe_type(a, b)
                     && params::same_choices(
@@ -184,14 +178,14 @@ impl Closure {
     pub fn lobe_decoded(&self, index: usize) -> &[f32] {
         let l = &self.lobes[index];
         let start = l.decoded_start as usize;
-        &self.decoded[start..start + l.decoded_len as usize]
+        &self.values[start..start + l.decoded_len as usize]
     }
 
     /// The parameter block of lobe `index`.
     pub fn lobe_params(&self, index: usize) -> &[f32] {
         let l = &self.lobes[index];
         let start = l.params_start as usize;
-        &self.params[start..start + l.params_len as usize]
+        &self.values[start..start + l.params_len as usize]
     }
 
     /// Add a lobe of type `type_id`. `params` is a full block laid out by the type's
@@ -211,7 +205,7 @@ impl Closure {
             ));
         }
         let lobe = registry.get(type_id)?;
-        if self.lobe_count == MAX_LOBES {
+        if self.lobe_count() == MAX_LOBES {
             return Err(Error::new(
                 Status::ClosureFull,
                 format!("a closure holds at most {MAX_LOBES} lobes"),
@@ -254,33 +248,35 @@ impl Closure {
                 ),
             ));
         }
-        let block = &mut self.params[self.params_len..self.params_len + size];
+        if let Some(values) = params {
+            params::validate(lobe.name(), specs, values)?;
+        }
+        self.lobes.try_reserve(1).map_err(|_| out_of_memory())?;
+        let start = self.values.len();
+        self.values
+            .try_reserve(size + decoded_size)
+            .map_err(|_| out_of_memory())?;
+        self.values.resize(start + size + decoded_size, 0.0);
+        let (block, decoded) = self.values[start..].split_at_mut(size);
         match params {
-            Some(values) => {
-                params::validate(lobe.name(), specs, values)?;
-                block.copy_from_slice(values);
-            }
+            Some(values) => block.copy_from_slice(values),
             None => params::write_defaults(specs, block),
         }
-        lobe.decode(
-            block,
-            &mut self.decoded[self.decoded_len..self.decoded_len + decoded_size],
-        );
-        self.lobes[self.lobe_count] = LobeInstance {
+        lobe.decode(block, decoded);
+        self.lobes.push(LobeInstance {
             lobe: lobe.clone(),
             type_id,
             weight: Rgb::new(weight[0], weight[1], weight[2]),
             frame,
-            params_start: self.params_len as u16,
+            params_start: start as u16,
             params_len: size as u16,
-            decoded_start: self.decoded_len as u16,
+            decoded_start: (start + size) as u16,
             decoded_len: decoded_size as u16,
             probability: 0.0,
-        };
+        });
         self.params_len += size;
         self.decoded_len += decoded_size;
-        self.lobe_count += 1;
-        Ok(self.lobe_count - 1)
+        Ok(self.lobe_count() - 1)
     }
 
     /// Fix the lobe selection probabilities; the closure is immutable afterwards.
@@ -291,29 +287,32 @@ impl Closure {
                 "the closure is already finished",
             ));
         }
-        let mut shares = [0.0f32; MAX_LOBES];
-        for (k, l) in self.lobes().iter().enumerate() {
-            let wo = self
-                .wo
-                .map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
-            let albedo = l.lobe.albedo_decoded(self.lobe_decoded(k), wo, self.mode);
-            shares[k] = (l.weight * albedo).luminance().max(0.0);
-        }
-        let n = self.lobe_count;
-        // Without any reflecting lobe at this wo, fall back to the weights, then to uniform.
-        if shares[..n].iter().sum::<f32>() <= 0.0 {
+        let n = self.lobe_count();
+        if n == 1 {
+            // One lobe is chosen with probability 1 whatever its albedo.
+            self.lobes[0].probability = 1.0;
+        } else {
+            let mut shares = [0.0f32; MAX_LOBES];
             for (k, l) in self.lobes().iter().enumerate() {
-                shares[k] = l.weight.luminance().max(0.0);
+                let wo = self
+                    .wo
+                    .map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
+                let albedo = l.lobe.albedo_decoded(self.lobe_decoded(k), wo, self.mode);
+                shares[k] = (l.weight * albedo).luminance().max(0.0);
             }
-        }
-        if shares[..n].iter().sum::<f32>() <= 0.0 {
-            shares[..n].fill(1.0);
-        }
-        for (lobe, p) in self.lobes[..n]
-            .iter_mut()
-            .zip(normalize_shares(&shares[..n]))
-        {
-            lobe.probability = p;
+            // Without any reflecting lobe at this wo, fall back to the weights, then to
+            // uniform.
+            if shares[..n].iter().sum::<f32>() <= 0.0 {
+                for (k, l) in self.lobes().iter().enumerate() {
+                    shares[k] = l.weight.luminance().max(0.0);
+                }
+            }
+            if shares[..n].iter().sum::<f32>() <= 0.0 {
+                shares[..n].fill(1.0);
+            }
+            for (lobe, p) in self.lobes.iter_mut().zip(normalize_shares(&shares[..n])) {
+                lobe.probability = p;
+            }
         }
         self.shape_id = self.hash_shape();
         self.finished = true;
@@ -324,8 +323,8 @@ impl Closure {
     /// transport.
     fn hash_shape(&self) -> u64 {
         use std::hash::{Hash, Hasher};
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        (self.lobe_count, self.mode == Transport::Radiance).hash(&mut h);
+        let mut h = ShapeHasher::default();
+        (self.lobe_count(), self.mode == Transport::Radiance).hash(&mut h);
         for (k, l) in self.lobes().iter().enumerate() {
             let identity = &*l.lobe as *const dyn crate::lobes::LobeType as *const () as usize;
             (l.type_id, identity).hash(&mut h);
@@ -353,7 +352,7 @@ impl Closure {
                 Status::OutOfRange,
                 format!(
                     "lobe index {index} is out of range: the closure has {} lobes",
-                    self.lobe_count
+                    self.lobe_count()
                 ),
             )
         })
@@ -398,7 +397,7 @@ impl Closure {
     fn mixture(&self, wo: Vec3<f32>, wi: Vec3<f32>) -> (Rgb<f32>, f32) {
         let mut value = Rgb::zero();
         let mut pdf = 0.0;
-        for k in 0..self.lobe_count {
+        for k in 0..self.lobe_count() {
             let (v, p) = self.eval_one(k, wo, wi);
             value = value + v;
             pdf += self.lobes[k].probability * p;
@@ -482,7 +481,7 @@ impl Closure {
         for (p, l) in probabilities.iter_mut().zip(self.lobes()) {
             *p = l.probability;
         }
-        mixture::choose(&probabilities[..self.lobe_count], u_lobe).map(|(k, u)| (k as usize, u))
+        mixture::choose(&probabilities[..self.lobe_count()], u_lobe).map(|(k, u)| (k as usize, u))
     }
 
     /// Sample lobe `index` alone: value is `weight * f |cos|`, pdf that lobe's own.
@@ -520,7 +519,7 @@ impl Closure {
         let (value, pdf) = match mixture {
             // Summed in lobe order, as `eval` sums them.
             Some(p) => mixture::sampled(s.delta, own, p, || {
-                (0..self.lobe_count).fold((Rgb::zero(), 0.0), |(value, pdf), j| {
+                (0..self.lobe_count()).fold((Rgb::zero(), 0.0), |(value, pdf), j| {
                     let (v, q) = if j == k {
                         own
                     } else {
@@ -582,6 +581,63 @@ impl Closure {
             * l.lobe
                 .albedo_decoded(self.lobe_decoded(index), l.frame.to_local(wo), self.mode))
     }
+}
+
+impl Recycle for Closure {
+    fn recycle(&mut self) {
+        self.lobes.clear();
+        self.values.clear();
+        self.params_len = 0;
+        self.decoded_len = 0;
+        self.shape_id = 0;
+        self.finished = false;
+    }
+
+    fn free_storage(&mut self) {
+        self.recycle();
+        self.lobes = Vec::new();
+        self.values = Vec::new();
+    }
+}
+
+/// The hasher of shape ids: a few words per lobe, hashed at every `finish`, where
+/// SipHash's setup and rounds cost more than the rest of the hash. Multiply-rotate
+/// mixing (as FxHash) spreads the words well enough for a lookup table that confirms
+/// every hit with `same_shape`.
+#[derive(Default)]
+struct ShapeHasher(u64);
+
+impl std::hash::Hasher for ShapeHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(u64::from(x));
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+fn out_of_memory() -> Error {
+    Error::new(
+        Status::OutOfMemory,
+        "out of memory: the closure's storage could not grow",
+    )
 }
 
 /// Whether two lobes are of the same registered type. The type id alone is not enough:

@@ -1,7 +1,7 @@
 //! Arenas, closure building, and eval / sample / pdf / albedo on a closure or one lobe.
 
 use super::*;
-use crate::closure::{Arena, Closure, EvalResult, SampleResult};
+use crate::closure::{Arena, Closure, EvalResult, Recycle, SampleResult};
 use crate::json;
 use crate::lobes::Transport;
 use crate::math::{Frame, Vec3};
@@ -80,13 +80,22 @@ unsafe fn arena_mut<'a>(p: *mut glint_arena) -> Result<&'a mut glint_arena, Erro
     Ok(a)
 }
 
+impl Recycle for glint_closure {
+    fn recycle(&mut self) {
+        self.closure.recycle();
+    }
+
+    fn free_storage(&mut self) {
+        self.closure.free_storage();
+    }
+}
+
 impl glint_arena {
-    /// Poison the tag of every closure in the arena, then free them.
-    fn clear(&mut self, poison: u64) {
+    /// Poison the tag of every closure in the arena.
+    fn poison(&mut self, poison: u64) {
         for slot in self.arena.iter() {
             slot.tag.set(poison);
         }
-        self.arena.reset();
     }
 }
 
@@ -222,7 +231,8 @@ pub unsafe extern "C" fn glint_arena_reset(arena: *mut glint_arena) -> glint_sta
     guard(|| {
         // SAFETY: per the contract.
         let a = unsafe { arena_mut(arena) }?;
-        a.clear(CLOSURE_RESET);
+        a.poison(CLOSURE_RESET);
+        a.arena.reset();
         a.generation = a.generation.wrapping_add(1);
         Ok(())
     })
@@ -248,7 +258,10 @@ pub unsafe extern "C" fn glint_arena_destroy(arena: *mut glint_arena) {
         // SAFETY: a handle from glint_arena_create, live or quarantined.
         let a = unsafe { &mut *arena };
         poison(&a.tag, ARENA_LIVE, ARENA_DEAD, "arena")?;
-        a.clear(CLOSURE_DEAD);
+        a.poison(CLOSURE_DEAD);
+        // The slots' headers (their tags) stay readable while quarantined; the lobes
+        // and blocks they held are freed now.
+        a.arena.free_storage();
         let mut bytes = a.arena.capacity() * std::mem::size_of::<glint_closure>();
         if bytes > GLINT_QUARANTINE_BYTES {
             a.arena.release();
@@ -326,6 +339,32 @@ fn place(
     Ok(())
 }
 
+/// Begin an empty closure in the arena's next slot, reusing the storage a closure
+/// left there, and hand out its handle.
+fn place_empty(
+    runtime: &glint_runtime,
+    arena: &mut glint_arena,
+    wo: Option<Vec3<f32>>,
+    mode: Transport,
+    out: &mut *mut glint_closure,
+) -> Result<(), Error> {
+    let generation = arena.generation;
+    let slot = arena.arena.alloc_with(
+        || glint_closure {
+            tag: Tag::new(closure_tag(generation)),
+            closure: Closure::new(wo, mode),
+            runtime,
+        },
+        |slot| {
+            slot.tag.set(closure_tag(generation));
+            slot.closure.restart(wo, mode);
+            slot.runtime = runtime;
+        },
+    )?;
+    *out = encode(slot, generation)?;
+    Ok(())
+}
+
 /// Begin a closure in `arena`. `wo` (world space, toward the viewer) may be NULL; when
 /// given, it fixes view-dependent lobe weights and lobe selection. `flags` is 0 or
 /// `GLINT_CLOSURE_IMPORTANCE`. Add lobes, then call `glint_closure_finish`.
@@ -343,12 +382,7 @@ pub unsafe extern "C" fn glint_closure_begin(
     guard(|| {
         // SAFETY: per the contract.
         let a = unsafe { constructor_args(runtime, arena, wo, out) }?;
-        place(
-            a.runtime,
-            a.arena,
-            Closure::new(a.wo, transport(flags)?),
-            a.out,
-        )
+        place_empty(a.runtime, a.arena, a.wo, transport(flags)?, a.out)
     })
 }
 
