@@ -69,33 +69,32 @@ impl<L: Lane> ConductorIor<L> {
 /// [`conductor`] at `cos_theta` with the IOR's terms computed once.
 #[inline(always)]
 pub fn conductor_with<L: Lane>(cos_theta: L, ior: &ConductorIor<L>) -> L {
-    conductor_at([cos_theta], ior)[0]
+    let cos = cos_theta.clamp(L::zero(), L::one());
+    let cos2 = cos * cos;
+    let sin2 = L::one() - cos2;
+    let t0 = ior.diff - sin2;
+    let a2_plus_b2 = (t0 * t0 + ior.cross).safe_sqrt();
+    let a = (L::splat(0.5) * (a2_plus_b2 + t0)).safe_sqrt();
+    let t1 = a2_plus_b2 + cos2;
+    let t2 = L::splat(2.0) * a * cos;
+    let t3 = cos2 * a2_plus_b2 + sin2 * sin2;
+    let t4 = t2 * sin2;
+    // With rs = (t1 - t2) / (t1 + t2) and rp = rs (t3 - t4) / (t3 + t4),
+    // (rs + rp) / 2 = rs t3 / (t3 + t4): one division. The product of the denominators
+    // cannot underflow: t1 + t2 >= cos^2 and t3 + t4 >= sin^4, so one is >= 1/4.
+    ((t1 - t2) * t3)
+        .safe_div((t1 + t2) * (t3 + t4))
+        .clamp(L::zero(), L::one())
 }
 
-/// [`conductor`] at `N` angles, written step by step over arrays so that the scalar
-/// instance vectorizes across the angles (a closure's albedo evaluates 14 of them
-/// per channel).
+/// [`conductor`] at `N` angles; a plain loop of the inlined form, which the scalar
+/// instance vectorizes across the angles (a closure's albedo evaluates 14 of them per
+/// channel).
 #[inline(always)]
 pub fn conductor_at<L: Lane, const N: usize>(cos_theta: [L; N], ior: &ConductorIor<L>) -> [L; N] {
-    let cos = cos_theta.map(|c| c.clamp(L::zero(), L::one()));
-    let cos2 = cos.map(|c| c * c);
-    let sin2 = cos2.map(|c2| L::one() - c2);
-    let t0 = sin2.map(|s2| ior.diff - s2);
-    let a2_plus_b2 = t0.map(|t| (t * t + ior.cross).safe_sqrt());
     let mut out = [L::zero(); N];
-    for j in 0..N {
-        let a = (L::splat(0.5) * (a2_plus_b2[j] + t0[j])).safe_sqrt();
-        let t1 = a2_plus_b2[j] + cos2[j];
-        let t2 = L::splat(2.0) * a * cos[j];
-        let t3 = cos2[j] * a2_plus_b2[j] + sin2[j] * sin2[j];
-        let t4 = t2 * sin2[j];
-        // With rs = (t1 - t2) / (t1 + t2) and rp = rs (t3 - t4) / (t3 + t4),
-        // (rs + rp) / 2 = rs t3 / (t3 + t4): one division. The product of the
-        // denominators cannot underflow: t1 + t2 >= cos^2 and t3 + t4 >= sin^4, so one
-        // is >= 1/4.
-        out[j] = ((t1 - t2) * t3)
-            .safe_div((t1 + t2) * (t3 + t4))
-            .clamp(L::zero(), L::one());
+    for (f, &cos) in out.iter_mut().zip(cos_theta.iter()) {
+        *f = conductor_with(cos, ior);
     }
     out
 }

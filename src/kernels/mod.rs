@@ -15,7 +15,7 @@ pub mod mixture;
 
 use crate::lobes::{Model, Params, Sample, ToWorld, Transport};
 use crate::math::lane::MAX_LANES;
-use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3};
+use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3, inv_length};
 use crate::simd::kernel;
 
 /// Most parameter values one lobe type may have to run in the SIMD kernels.
@@ -341,7 +341,7 @@ fn load3<L: Lane>(rows: [&[f32]; 3], i: usize, n: usize) -> Vec3<L> {
 fn unit_in_range<L: Lane>(d: Vec3<L>) -> (Vec3<L>, L::Mask) {
     let len2 = d.length_squared();
     let ok = len2.ge(L::splat(1e-24)) & len2.le(L::splat(1e24));
-    (d * (L::one() / len2.sqrt()), ok)
+    (d * inv_length(len2), ok)
 }
 
 /// A job's direction register, normalized when the job's directions are raw;

@@ -38,9 +38,34 @@ pub(crate) fn ndf_kind(choice: usize) -> NdfKind {
     }
 }
 
+/// Length of a decoded microfacet distribution: kind, `alpha_x`, `alpha_y`, roughness.
+pub(crate) const DISTRIBUTION_DECODED_LEN: usize = 4;
+
+/// Decodes the `distribution`, `roughness` and `anisotropic` parameters that open a
+/// microfacet lobe's block into `out[..DISTRIBUTION_DECODED_LEN]`.
+pub(crate) fn decode_distribution(params: &[f32], out: &mut [f32]) -> Distribution<f32> {
+    let (kind, roughness, anisotropic) = (params[0], params[1], params[2]);
+    let dist = Distribution::from_roughness(ndf_kind(kind as usize), roughness, anisotropic);
+    out[..DISTRIBUTION_DECODED_LEN].copy_from_slice(&[kind, dist.alpha_x, dist.alpha_y, roughness]);
+    dist
+}
+
+/// Reads what [`decode_distribution`] wrote: the distribution and the roughness.
+#[inline(always)]
+pub(crate) fn read_distribution<L: Lane>(decoded: &Params<'_, L>) -> (Distribution<L>, L) {
+    let dist = Distribution {
+        kind: ndf_kind(decoded.choice(0)),
+        alpha_x: decoded.float(1),
+        alpha_y: decoded.float(2),
+    };
+    (dist, decoded.float(3))
+}
+
 const DISTRIBUTION: usize = offset_of(Conductor::PARAMS, 0);
 const ROUGHNESS: usize = offset_of(Conductor::PARAMS, 1);
 const ANISOTROPIC: usize = offset_of(Conductor::PARAMS, 2);
+// `decode_distribution` reads the three as the block's first parameters.
+const _: () = assert!(DISTRIBUTION == 0 && ROUGHNESS == 1 && ANISOTROPIC == 2);
 const FRESNEL: usize = offset_of(Conductor::PARAMS, 3);
 
 pub struct Prepared<L> {
@@ -104,29 +129,22 @@ impl Model for Conductor {
         0.02 + 0.04 * params[ANISOTROPIC].powi(6)
     }
 
-    /// The distribution, `alpha_x`, `alpha_y`, the roughness, then the decoded Fresnel
-    /// group (`fresnel_params::decode`).
-    const DECODED_LEN: usize = 4 + fresnel_params::DECODED_LEN;
+    /// The distribution (`decode_distribution`), then the decoded Fresnel group
+    /// (`fresnel_params::decode`).
+    const DECODED_LEN: usize = DISTRIBUTION_DECODED_LEN + fresnel_params::DECODED_LEN;
 
     fn decode(params: &[f32], out: &mut [f32]) {
-        let roughness = params[ROUGHNESS];
-        let kind = params[DISTRIBUTION];
-        let dist =
-            Distribution::from_roughness(ndf_kind(kind as usize), roughness, params[ANISOTROPIC]);
-        out[..4].copy_from_slice(&[kind, dist.alpha_x, dist.alpha_y, roughness]);
-        fresnel_params::decode(params, FRESNEL, &mut out[4..]);
+        decode_distribution(params, out);
+        fresnel_params::decode(params, FRESNEL, &mut out[DISTRIBUTION_DECODED_LEN..]);
     }
 
     #[inline(always)]
     fn prepare<L: Lane>(decoded: Params<'_, L>) -> Prepared<L> {
+        let (dist, roughness) = read_distribution(&decoded);
         Prepared {
-            dist: Distribution {
-                kind: ndf_kind(decoded.choice(0)),
-                alpha_x: decoded.float(1),
-                alpha_y: decoded.float(2),
-            },
-            fresnel: fresnel_params::read(&decoded, 4),
-            roughness: decoded.float(3),
+            dist,
+            fresnel: fresnel_params::read(&decoded, DISTRIBUTION_DECODED_LEN),
+            roughness,
         }
     }
 
@@ -238,7 +256,9 @@ mod tests {
             block[ROUGHNESS] = 0.03 + 0.97 * rnd();
             block[ANISOTROPIC] = rnd();
             block[FRESNEL] = (i / 2 % 3) as f32;
-            let p = Conductor::prepare(Params::new(&block));
+            let mut decoded = [0.0; Conductor::DECODED_LEN];
+            Conductor::decode(&block, &mut decoded);
+            let p = Conductor::prepare(Params::new(&decoded));
             let (ct, phi) = (rnd(), 2.0 * crate::math::PI * rnd());
             let st = (1.0 - ct * ct).max(0.0).sqrt();
             let wo = Vec3::new(st * phi.cos(), st * phi.sin(), ct).normalize();

@@ -21,7 +21,9 @@
 //! and transmitted single-scattering tables of `crate::albedo_table` (isotropic, or over
 //! aspect and view azimuth), the transmitted part times `1 / eta'^2` in radiance.
 
-use super::conductor::{DISTRIBUTION_CHOICES, ndf_kind};
+use super::conductor::{
+    DISTRIBUTION_CHOICES, DISTRIBUTION_DECODED_LEN, decode_distribution, read_distribution,
+};
 use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, flags};
 use crate::albedo_table::DielectricTable;
 use crate::fresnel;
@@ -37,6 +39,8 @@ pub const INDEX_MATCHED: f32 = 1e-4;
 const DISTRIBUTION: usize = offset_of(Dielectric::PARAMS, 0);
 const ROUGHNESS: usize = offset_of(Dielectric::PARAMS, 1);
 const ANISOTROPIC: usize = offset_of(Dielectric::PARAMS, 2);
+// `decode_distribution` reads the three as the block's first parameters.
+const _: () = assert!(DISTRIBUTION == 0 && ROUGHNESS == 1 && ANISOTROPIC == 2);
 const ETA: usize = offset_of(Dielectric::PARAMS, 3);
 
 pub struct Prepared<L: Lane> {
@@ -239,21 +243,27 @@ impl Model for Dielectric {
         0.03 + 0.25 * params[ANISOTROPIC].powi(3)
     }
 
+    /// The distribution (`decode_distribution`), `eta`, and 1 where the interface is
+    /// smooth (delta or index-matched), else 0.
+    const DECODED_LEN: usize = DISTRIBUTION_DECODED_LEN + 2;
+
+    fn decode(params: &[f32], out: &mut [f32]) {
+        let dist = decode_distribution(params, out);
+        let eta = params[ETA];
+        let smooth = dist.is_delta() || (eta - 1.0).abs() < INDEX_MATCHED;
+        out[DISTRIBUTION_DECODED_LEN..].copy_from_slice(&[eta, f32::from(u8::from(smooth))]);
+    }
+
     #[inline(always)]
-    fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
-        let roughness = params.float(ROUGHNESS);
-        let eta = params.float(ETA);
-        let dist = Distribution::from_roughness(
-            ndf_kind(params.choice(DISTRIBUTION)),
-            roughness,
-            params.float(ANISOTROPIC),
-        );
-        let matched = (eta - L::one()).abs().lt(L::splat(INDEX_MATCHED));
+    fn prepare<L: Lane>(decoded: Params<'_, L>) -> Prepared<L> {
+        let (dist, roughness) = read_distribution(&decoded);
         Prepared {
-            smooth: dist.is_delta() | matched,
             dist,
-            eta,
             roughness,
+            eta: decoded.float(DISTRIBUTION_DECODED_LEN),
+            smooth: decoded
+                .float(DISTRIBUTION_DECODED_LEN + 1)
+                .gt(L::splat(0.5)),
         }
     }
 
@@ -348,7 +358,9 @@ mod tests {
             block[ROUGHNESS] = 0.04 + 0.96 * rnd();
             block[ANISOTROPIC] = rnd();
             block[ETA] = [1.5, 0.7, 2.4, 1.33][i / 2 % 4];
-            let p = Dielectric::prepare(Params::new(&block));
+            let mut decoded = [0.0; Dielectric::DECODED_LEN];
+            Dielectric::decode(&block, &mut decoded);
+            let p = Dielectric::prepare(Params::new(&decoded));
             let (ct, phi) = (rnd(), 2.0 * crate::math::PI * rnd());
             let ct = if i % 3 == 0 { -ct } else { ct };
             let st = (1.0 - ct * ct).max(0.0).sqrt();

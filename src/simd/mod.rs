@@ -132,11 +132,14 @@ macro_rules! elementary_functions_from_vmath {
 }
 use elementary_functions_from_vmath;
 
-/// One Newton step `y (3 - x y^2) / 2` on a hardware estimate `y` of `1 / sqrt(x)`,
-/// keeping the estimate where the step is not finite (x = 0 or inf).
+/// One Newton step `y + y r / 2`, `r = 1 - x y^2`, on a hardware estimate `y` of
+/// `1 / sqrt(x)`, keeping the estimate where the step is not finite (x = 0 or inf).
+/// The residual and the update are fused, so only `x y` rounds before them: the
+/// estimate's own error (up to 1.5 2^-12 on Intel, less on AMD) leaves 1.5 e^2 <= 2e-7.
 #[inline(always)]
 fn newton_rsqrt<L: Lane>(x: L, y: L) -> L {
-    let refined = y * (L::splat(1.5) - L::splat(0.5) * x * y * y);
+    let residual = (x * y).mul_add(-y, L::one());
+    let refined = (y * L::splat(0.5)).mul_add(residual, y);
     L::select(refined.is_finite(), refined, y)
 }
 
