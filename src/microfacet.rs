@@ -238,7 +238,10 @@ impl<L: Lane> Distribution<L> {
         let p2 = h - h_minus_p2;
         let nz = (h_minus_p2 * (h + p2)).safe_sqrt();
         let nh = t1 * p1 + t2 * p2 + vh * nz;
-        Vec3::new(ax * nh.x, ay * nh.y, nh.z.max(L::splat(1e-6))).normalize()
+        // The normal's length by `rsqrt`: an error in it scales the normal without
+        // turning it, and the sample's value and pdf come from the settled direction.
+        // Its square is >= 1e-12, a normal float.
+        Vec3::new(ax * nh.x, ay * nh.y, nh.z.max(L::splat(1e-6))).normalize_estimate()
     }
 
     /// Heitz and d'Eon 2014 ("Importance Sampling Microfacet-Based BSDFs using the

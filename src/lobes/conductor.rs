@@ -174,9 +174,16 @@ impl Model for Conductor {
         // the same way), so that both agree with eval to the last bit: narrow lobes
         // amplify the rounding between the sampled m and eval's half vector.
         let e = reflect_finish(p, &p.dist.view(wo), wo, wi);
+        // The Fresnel term at wo only where a lane is delta: per channel it costs as
+        // much as the rest of the value.
+        let value = if delta.any() {
+            Rgb::select(delta, p.fresnel.eval(wo.z), e.value)
+        } else {
+            e.value
+        };
         Sample {
             wi,
-            value: Rgb::select(delta, p.fresnel.eval(wo.z), e.value),
+            value,
             pdf: L::select(delta, L::one(), e.pdf),
             valid: both_above(wo, wi) & (delta | e.pdf.gt(L::zero())),
             transmitted: L::Mask::splat(false),
