@@ -184,6 +184,7 @@ impl SplitLanes for Soa3Mut<'_> {
 }
 
 impl Soa3<'_> {
+    #[inline]
     fn check(&self, count: usize, what: &str) -> Result<(), Error> {
         if self.x.len() >= count && self.y.len() >= count && self.z.len() >= count {
             return Ok(());

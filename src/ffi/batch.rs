@@ -153,6 +153,7 @@ batch_args!(
     glint_albedo_batch_args
 );
 
+#[inline]
 /// `count` elements at `p`, which must not be NULL. `what` is formatted only for the
 /// error: a batch call allocates nothing but its staging, which may fail.
 ///
@@ -166,6 +167,7 @@ unsafe fn input<'a, T>(p: *const T, count: usize, what: impl Display) -> Result<
     Ok(unsafe { std::slice::from_raw_parts(p, count) })
 }
 
+#[inline]
 /// `count` writable elements at `p`, which must not be NULL (`what` as for [`input`]).
 ///
 /// # Safety
@@ -251,6 +253,7 @@ unsafe fn lanes<'a>(
     }
 }
 
+#[inline]
 /// # Safety
 /// `x`, `y`, `z` are NULL or valid for `count` reads.
 unsafe fn soa_in<'a>(
@@ -270,6 +273,7 @@ unsafe fn soa_in<'a>(
     }
 }
 
+#[inline]
 /// # Safety
 /// `x`, `y`, `z` are NULL or valid for `count` writes and unaliased.
 unsafe fn soa_out<'a>(
