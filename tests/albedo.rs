@@ -334,3 +334,52 @@ fn table_first_use_time() {
         }
     }
 }
+
+/// A closure computes a conductor's Fresnel nodes once, on the widest ISA the CPU has
+/// (`kernels::conductor_curve`); scalar and batch albedos then read the same values. So
+/// the curve must not depend on the ISA: every kernel set gives the scalar `f32` bits,
+/// over IORs from the schema's corners (eta 0.001..1000, k 0..1000) and in between.
+#[test]
+fn conductor_curve_has_the_same_bits_on_every_isa() {
+    use glint::albedo_table::FRESNEL_CURVE_COS;
+    use glint::fresnel::{ConductorIor, conductor_with};
+    use glint::kernels::{CURVE_LEN, conductor_curve};
+    use glint::simd::Kernels;
+    let values = [
+        0.001f32, 0.01, 0.14, 0.37, 1.0, 1.0001, 1.44, 3.98, 17.0, 250.0, 1000.0,
+    ];
+    let ks = [0.0f32, 1e-4, 0.5, 2.39, 3.98, 40.0, 1000.0];
+    let mut compared = 0;
+    for kernels in Kernels::available() {
+        for (i, &eta) in values.iter().enumerate() {
+            for (j, &k) in ks.iter().enumerate() {
+                let etas = [
+                    eta,
+                    values[(i + 3) % values.len()],
+                    values[(i + 7) % values.len()],
+                ];
+                let kk = [k, ks[(j + 2) % ks.len()], ks[(j + 5) % ks.len()]];
+                let mut curve = [[0.0; CURVE_LEN]; 3];
+                conductor_curve(kernels, etas, kk, &mut curve);
+                for c in 0..3 {
+                    let ior = ConductorIor::new(etas[c], kk[c]);
+                    for (n, &cos) in FRESNEL_CURVE_COS.iter().enumerate() {
+                        let want = conductor_with(cos, &ior);
+                        assert_eq!(
+                            curve[c][n].to_bits(),
+                            want.to_bits(),
+                            "{:?}: eta {} k {} cos {cos}: {} != {want}",
+                            kernels.isa(),
+                            etas[c],
+                            kk[c],
+                            curve[c][n]
+                        );
+                        assert!((0.0..=1.0).contains(&want));
+                        compared += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(compared >= 3 * 14 * values.len() * ks.len());
+}

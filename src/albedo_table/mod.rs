@@ -48,7 +48,7 @@ const R_MAX: f32 = 1.5;
 /// Intervals of the piecewise-linear Fresnel interpolant; nodes `c_k = (k / FRESNEL_K)^2`.
 const FRESNEL_K: usize = 12;
 /// Fresnel nodes.
-const FRESNEL_NODES: usize = FRESNEL_K + 1;
+pub const FRESNEL_NODES: usize = FRESNEL_K + 1;
 /// Channels of a reflection table cell: the `H_k`, then Schlick's `A` and `B`.
 const CHANNELS: usize = FRESNEL_NODES + 2;
 /// Rows of the anisotropic reflection table in `r`: the isotropic rows up to `r = 1.02`.
@@ -314,40 +314,87 @@ impl ReflectionTable {
     /// above the surface. Schlick is exact in `A` and `B`; a conductor is Schlick's
     /// `F0 A + B` (`F0 = F(1)`, `F(0) = 1`) plus its departure from that curve,
     /// interpolated at the Fresnel nodes: small and smooth, so little interpolation error.
+    /// `nodes` are the conductor's [`FresnelNodes`] when the caller has them (closures
+    /// compute them once per lobe); otherwise they are computed here.
     #[inline(always)]
     pub fn albedo<L: Lane>(
         wo: Vec3<L>,
         dist: &Distribution<L>,
         fresnel: &FresnelModel<L>,
+        nodes: Option<&FresnelNodes<L>>,
     ) -> Rgb<L> {
         let h = Self::lookup(wo, dist);
         let (a, b) = (h[FRESNEL_NODES], h[FRESNEL_NODES + 1]);
         let sum = match fresnel {
             FresnelModel::Schlick { f0, f90 } => *f0 * a + *f90 * b,
             FresnelModel::Conductor { eta, k } => {
-                // Channel by channel, all nodes at once: the scalar instance (closure
-                // building) vectorizes across the nodes.
-                let nodes: [L; FRESNEL_NODES + 1] = std::array::from_fn(|j| {
-                    L::splat(FRESNEL_NODE_COS.get(j).copied().unwrap_or(1.0))
-                });
-                let channel = |eta: L, k: L| {
-                    let f = fresnel::conductor_at(nodes, &fresnel::ConductorIor::new(eta, k));
-                    let f0 = f[FRESNEL_NODES];
-                    let mut sum = f0 * a + b;
-                    for j in 0..FRESNEL_NODES {
-                        let departure = f[j] - fresnel::schlick(f0, L::one(), nodes[j]);
-                        sum += departure * h[j];
+                let computed;
+                let nodes = match nodes {
+                    Some(n) => n,
+                    None => {
+                        computed = FresnelNodes::of_conductor(*eta, *k);
+                        &computed
                     }
-                    sum
                 };
-                Rgb::new(
-                    channel(eta.r, k.r),
-                    channel(eta.g, k.g),
-                    channel(eta.b, k.b),
-                )
+                let mut sum = nodes.f0 * a + Rgb::splat(b);
+                for (d, &hj) in nodes.departures.iter().zip(&h[..FRESNEL_NODES]) {
+                    sum = sum + *d * hj;
+                }
+                sum
             }
         };
         sum.map(|v| v.max(L::zero()))
+    }
+}
+
+/// A conductor's Fresnel curve as [`ReflectionTable::albedo`] reads it, per channel:
+/// `F(1)` and the departures `F(c_j) - Schlick(F(1), 1, c_j)` at the Fresnel nodes
+/// `c_j`. They depend on the IOR alone, so a closure computes them once, when the lobe
+/// is added, instead of 13 exact Fresnel terms per channel at every albedo.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FresnelNodes<L> {
+    pub f0: Rgb<L>,
+    pub departures: [Rgb<L>; FRESNEL_NODES],
+}
+
+impl<L: Lane> FresnelNodes<L> {
+    /// Values of [`Self::to_values`]: `f0`, then each departure, as `r, g, b`.
+    pub const LEN: usize = 3 * (FRESNEL_NODES + 1);
+
+    /// From a conductor's Fresnel curve per channel at [`FRESNEL_CURVE_COS`].
+    #[inline(always)]
+    pub fn from_curve(curve: [[L; FRESNEL_NODES + 1]; 3]) -> Self {
+        let [fr, fg, fb] = curve;
+        let f0 = Rgb::new(fr[FRESNEL_NODES], fg[FRESNEL_NODES], fb[FRESNEL_NODES]);
+        let mut departures = [Rgb::splat(L::zero()); FRESNEL_NODES];
+        for (j, d) in departures.iter_mut().enumerate() {
+            let cos = L::splat(FRESNEL_CURVE_COS[j]);
+            *d = Rgb::new(
+                fr[j] - fresnel::schlick(f0.r, L::one(), cos),
+                fg[j] - fresnel::schlick(f0.g, L::one(), cos),
+                fb[j] - fresnel::schlick(f0.b, L::one(), cos),
+            );
+        }
+        FresnelNodes { f0, departures }
+    }
+
+    #[inline(always)]
+    pub fn of_conductor(eta: Rgb<L>, k: Rgb<L>) -> Self {
+        let cos = FRESNEL_CURVE_COS.map(L::splat);
+        let curve = |eta: L, k: L| fresnel::conductor_at(cos, &fresnel::ConductorIor::new(eta, k));
+        Self::from_curve([curve(eta.r, k.r), curve(eta.g, k.g), curve(eta.b, k.b)])
+    }
+}
+
+impl FresnelNodes<f32> {
+    /// Writes [`Self::LEN`] values into `out`.
+    pub fn to_values(&self, out: &mut [f32]) {
+        for (rgb, chunk) in std::iter::once(&self.f0)
+            .chain(&self.departures)
+            .zip(out.chunks_exact_mut(3))
+        {
+            chunk.copy_from_slice(&rgb.to_array());
+        }
     }
 }
 
@@ -364,9 +411,10 @@ const fn fresnel_node(k: usize) -> f32 {
     x * x
 }
 
-/// The Fresnel nodes `c_k` ([`fresnel_node`]), as the albedo reads them.
-const FRESNEL_NODE_COS: [f32; FRESNEL_NODES] = {
-    let mut c = [0.0; FRESNEL_NODES];
+/// The Fresnel nodes `c_k` ([`fresnel_node`]), then normal incidence, 1: where
+/// [`FresnelNodes`] evaluates a conductor's Fresnel curve.
+pub const FRESNEL_CURVE_COS: [f32; FRESNEL_NODES + 1] = {
+    let mut c = [1.0; FRESNEL_NODES + 1];
     let mut k = 0;
     while k < FRESNEL_NODES {
         c[k] = fresnel_node(k);

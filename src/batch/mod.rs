@@ -563,7 +563,7 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
         if skip == Some(k) {
             continue;
         }
-        let lanes = lobe.lanes(input, group, k, len);
+        let lanes = lobe.lanes(input, group, k, len, false);
         let [vr, vg, vb] = &mut *value;
         let mut job = EvalJob {
             len,
@@ -769,7 +769,7 @@ fn albedo_staged<'a, C: ClosureSource<'a>>(
         stage_input(kernels, input, s, g, len, None);
         let group = &s.groups.groups()[g];
         for (k, l) in closure.lobes().iter().enumerate() {
-            let lanes = s.lobe.lanes(input, group, k, len);
+            let lanes = s.lobe.lanes(input, group, k, len, true);
             let mut job = AlbedoJob {
                 len,
                 mode: closure.transport(),
@@ -1197,7 +1197,7 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
         for row in [uc, u0, u1] {
             row[n..].fill(0.5);
         }
-        let lanes = s.lobe.lanes(input, group, k, len);
+        let lanes = s.lobe.lanes(input, group, k, len, false);
         let [sv_r, sv_g, sv_b] = &mut s.sample_value;
         let mut job = SampleJob {
             len,

@@ -367,13 +367,15 @@ pub(super) struct LobeRows {
 }
 
 impl LobeRows {
-    /// Lobe `k` of the group's closures, as the kernels read it.
+    /// Lobe `k` of the group's closures, as the kernels read it; per-lane blocks hold
+    /// what eval and sample read, or the whole decoded block for `albedo`.
     pub fn lanes<'s, 'a: 's, C: ClosureSource<'a>>(
         &'s mut self,
         input: &BatchInput<'a, C>,
         group: &Group,
         k: usize,
         len: usize,
+        albedo: bool,
     ) -> LobeLanes<'s> {
         let closure_of = |lane: usize| input.closures.closure(lane).expect("resolved before");
         let rep = closure_of(group.rep);
@@ -386,7 +388,11 @@ impl LobeRows {
                 probability: l.probability,
             };
         }
-        let param_count = rep.lobe_decoded(k).len();
+        let param_count = if albedo {
+            rep.lobe_decoded(k).len()
+        } else {
+            rep.lobes()[k].lobe.lane_decoded_len()
+        };
         let params = grow(&mut self.params, param_count * len);
         let frame = grow(&mut self.frame, 9 * len);
         let weight = grow(&mut self.weight, 3 * len);
@@ -396,7 +402,7 @@ impl LobeRows {
         for j in 0..len {
             let c = closure_of(lane_at(j));
             let l = &c.lobes()[k];
-            for (p, &v) in c.lobe_decoded(k).iter().enumerate() {
+            for (p, &v) in c.lobe_decoded(k)[..param_count].iter().enumerate() {
                 params[p * len + j] = v;
             }
             let axes = [l.frame.t, l.frame.b, l.frame.n];

@@ -101,9 +101,10 @@ pub struct Closure {
     /// Each lobe's raw parameter block followed by the same block decoded once
     /// (`LobeType::decode`), as every call reads it.
     values: Vec<f32>,
-    /// Raw and decoded values held, each bounded by [`MAX_PARAM_VALUES`].
+    /// Raw values held, bounded by [`MAX_PARAM_VALUES`]. That bounds the decoded
+    /// values too: a plugin's decoded block is its raw block, and a built-in type's is
+    /// at most `MAX_DECODED_LEN` per lobe.
     params_len: usize,
-    decoded_len: usize,
     /// A hash of the shape ([`Self::same_shape`]), fixed by `finish`.
     shape_id: u64,
     wo: Option<Vec3<f32>>,
@@ -118,7 +119,6 @@ impl Closure {
             lobes: Vec::new(),
             values: Vec::new(),
             params_len: 0,
-            decoded_len: 0,
             shape_id: 0,
             wo,
             mode,
@@ -240,14 +240,6 @@ impl Closure {
             ));
         }
         let decoded_size = lobe.decoded_len();
-        if self.decoded_len + decoded_size > MAX_PARAM_VALUES {
-            return Err(Error::new(
-                Status::ClosureFull,
-                format!(
-                    "the closure's lobes hold at most {MAX_PARAM_VALUES} decoded parameter values"
-                ),
-            ));
-        }
         if let Some(values) = params {
             params::validate(lobe.name(), specs, values)?;
         }
@@ -275,7 +267,6 @@ impl Closure {
             probability: 0.0,
         });
         self.params_len += size;
-        self.decoded_len += decoded_size;
         Ok(self.lobe_count() - 1)
     }
 
@@ -588,7 +579,6 @@ impl Recycle for Closure {
         self.lobes.clear();
         self.values.clear();
         self.params_len = 0;
-        self.decoded_len = 0;
         self.shape_id = 0;
         self.finished = false;
     }

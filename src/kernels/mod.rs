@@ -13,6 +13,8 @@
 
 pub mod mixture;
 
+use crate::albedo_table::FRESNEL_CURVE_COS;
+use crate::fresnel;
 use crate::lobes::{Model, Params, Sample, ToWorld, Transport};
 use crate::math::lane::MAX_LANES;
 use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3, inv_length};
@@ -609,6 +611,27 @@ fn choose_body<L: Lane>(
     true
 }
 
+/// Values of a conductor's Fresnel curve at [`FRESNEL_CURVE_COS`].
+pub const CURVE_LEN: usize = FRESNEL_CURVE_COS.len();
+
+#[inline(always)]
+fn conductor_curve_body<L: Lane>(eta: [f32; 3], k: [f32; 3], out: &mut [[f32; CURVE_LEN]; 3]) {
+    for ((&eta, &k), row) in eta.iter().zip(&k).zip(out.iter_mut()) {
+        let ior = fresnel::ConductorIor::new(L::splat(eta), L::splat(k));
+        for i in (0..CURVE_LEN).step_by(L::LANES) {
+            let n = L::LANES.min(CURVE_LEN - i);
+            let cos = load::<L>(&FRESNEL_CURVE_COS, i, n, 1.0);
+            store(fresnel::conductor_with(cos, &ior), row, i, n);
+        }
+    }
+}
+
+kernel!(
+    /// A conductor's Fresnel curve per channel at [`FRESNEL_CURVE_COS`], for the
+    /// albedo's `FresnelNodes` (a closure computes them when a conductor is added).
+    /// `fresnel::conductor_with` has no fused operations, so every ISA gives the same bits.
+    conductor_curve<>(eta: [f32; 3], k: [f32; 3], out: &mut [[f32; CURVE_LEN]; 3]) => conductor_curve_body
+);
 kernel!(
     /// Choose the lobe of each lane of a shared closure (`choose_body`).
     choose_lobes<>(probabilities: &[f32], u: &[f32], chosen: &mut [f32], reused: &mut [f32]) -> bool => choose_body

@@ -19,7 +19,7 @@
 
 use super::fresnel_params::{self, with_fresnel_params};
 use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
-use crate::albedo_table::ReflectionTable;
+use crate::albedo_table::{FresnelNodes, ReflectionTable};
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::microfacet::{Distribution, NdfKind, View};
@@ -71,8 +71,14 @@ const FRESNEL: usize = offset_of(Conductor::PARAMS, 3);
 pub struct Prepared<L> {
     dist: Distribution<L>,
     fresnel: FresnelModel<L>,
+    /// Read only by `albedo`; `None` in blocks staged for eval and sample.
+    nodes: Option<FresnelNodes<L>>,
     roughness: L,
 }
+
+/// Where the conductor's decoded Fresnel group and albedo nodes start.
+const DECODED_FRESNEL: usize = DISTRIBUTION_DECODED_LEN;
+const DECODED_NODES: usize = DECODED_FRESNEL + fresnel_params::DECODED_LEN;
 
 impl Model for Conductor {
     const NAME: &'static str = "conductor";
@@ -129,21 +135,27 @@ impl Model for Conductor {
         0.02 + 0.04 * params[ANISOTROPIC].powi(6)
     }
 
-    /// The distribution (`decode_distribution`), then the decoded Fresnel group
-    /// (`fresnel_params::decode`).
-    const DECODED_LEN: usize = DISTRIBUTION_DECODED_LEN + fresnel_params::DECODED_LEN;
+    /// The distribution (`decode_distribution`), the decoded Fresnel group
+    /// (`fresnel_params::decode`), then the albedo's conductor nodes
+    /// (`fresnel_params::decode_nodes`).
+    const DECODED_LEN: usize = DECODED_NODES + fresnel_params::NODES_LEN;
+    const LANE_DECODED_LEN: usize = DECODED_NODES;
 
     fn decode(params: &[f32], out: &mut [f32]) {
         decode_distribution(params, out);
-        fresnel_params::decode(params, FRESNEL, &mut out[DISTRIBUTION_DECODED_LEN..]);
+        let (fresnel, nodes) = out[DECODED_FRESNEL..].split_at_mut(fresnel_params::DECODED_LEN);
+        fresnel_params::decode(params, FRESNEL, fresnel);
+        fresnel_params::decode_nodes(fresnel, nodes);
     }
 
     #[inline(always)]
     fn prepare<L: Lane>(decoded: Params<'_, L>) -> Prepared<L> {
         let (dist, roughness) = read_distribution(&decoded);
+        let fresnel = fresnel_params::read(&decoded, DECODED_FRESNEL);
         Prepared {
             dist,
-            fresnel: fresnel_params::read(&decoded, DISTRIBUTION_DECODED_LEN),
+            nodes: fresnel_params::read_nodes(&decoded, DECODED_NODES, &fresnel),
+            fresnel,
             roughness,
         }
     }
@@ -195,22 +207,16 @@ impl Model for Conductor {
 
     #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
-        microfacet_reflection_albedo(&p.dist, &p.fresnel, wo)
+        // The Fresnel-node table when rough, exact `F(cos_o)` where delta.
+        let rough = ReflectionTable::albedo(wo, &p.dist, &p.fresnel, p.nodes.as_ref());
+        let delta = p.dist.is_delta();
+        let albedo = if delta.any() {
+            Rgb::select(delta, p.fresnel.eval(wo.z), rough)
+        } else {
+            rough
+        };
+        Rgb::select(wo.z.gt(L::zero()), albedo, Rgb::zero())
     }
-}
-
-/// Albedo of a one-sided microfacet reflection lobe with Fresnel `fresnel`: the
-/// Fresnel-node table when rough, exact `F(cos_o)` when delta.
-#[inline(always)]
-pub(crate) fn microfacet_reflection_albedo<L: Lane>(
-    dist: &Distribution<L>,
-    fresnel: &FresnelModel<L>,
-    wo: Vec3<L>,
-) -> Rgb<L> {
-    let rough = ReflectionTable::albedo(wo, dist, fresnel);
-    let exact = fresnel.eval(wo.z);
-    let albedo = Rgb::select(dist.is_delta(), exact, rough);
-    Rgb::select(wo.z.gt(L::zero()), albedo, Rgb::zero())
 }
 
 /// The `wi` side of the conductor's eval, given the `wo` side `v` ([`Distribution::view`]):

@@ -2,8 +2,11 @@
 //! one schema, one decoder, so every lobe names and reads them the same way.
 
 use super::Params;
+use crate::albedo_table::FresnelNodes;
 use crate::fresnel::FresnelModel;
+use crate::kernels;
 use crate::math::Lane;
+use crate::simd::Kernels;
 
 /// Choices of the `fresnel` parameter.
 pub const FRESNEL_CHOICES: &[&str] = &["schlick", "conductor", "artistic"];
@@ -63,4 +66,42 @@ pub fn read<L: Lane>(decoded: &Params<'_, L>, at: usize) -> FresnelModel<L> {
         0 => FresnelModel::Schlick { f0: a, f90: b },
         _ => FresnelModel::Conductor { eta: a, k: b },
     }
+}
+
+/// Values of the decoded conductor nodes ([`decode_nodes`]).
+pub const NODES_LEN: usize = FresnelNodes::<f32>::LEN;
+
+/// After a decoded Fresnel group `fresnel` ([`decode`]), the albedo's
+/// [`FresnelNodes`] of a conductor ([`NODES_LEN`] values; zeros for Schlick, which
+/// needs none).
+pub fn decode_nodes(fresnel: &[f32], out: &mut [f32]) {
+    match read(&Params::<f32>::new(fresnel), 0) {
+        FresnelModel::Conductor { eta, k } => {
+            let mut curve = [[0.0; kernels::CURVE_LEN]; 3];
+            kernels::conductor_curve(Kernels::best(), eta.to_array(), k.to_array(), &mut curve);
+            FresnelNodes::from_curve(curve).to_values(out);
+        }
+        FresnelModel::Schlick { .. } => out[..NODES_LEN].fill(0.0),
+    }
+}
+
+/// The conductor nodes at decoded offset `at` when `fresnel` is a conductor and the
+/// block holds them (blocks staged for eval and sample stop before them).
+#[inline(always)]
+pub fn read_nodes<L: Lane>(
+    decoded: &Params<'_, L>,
+    at: usize,
+    fresnel: &FresnelModel<L>,
+) -> Option<FresnelNodes<L>> {
+    if !matches!(fresnel, FresnelModel::Conductor { .. }) || !decoded.holds(at + NODES_LEN) {
+        return None;
+    }
+    let mut nodes = FresnelNodes {
+        f0: decoded.rgb(at),
+        departures: [crate::math::Rgb::splat(L::zero()); crate::albedo_table::FRESNEL_NODES],
+    };
+    for (j, d) in nodes.departures.iter_mut().enumerate() {
+        *d = decoded.rgb(at + 3 * (j + 1));
+    }
+    Some(nodes)
 }

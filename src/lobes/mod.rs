@@ -203,6 +203,14 @@ impl<'a, L: Lane> Params<'a, L> {
             source: ParamSource::Shared(raw),
         }
     }
+    /// Whether the block holds `len` values.
+    #[inline(always)]
+    pub fn holds(&self, len: usize) -> bool {
+        match self.source {
+            ParamSource::Lanes(raw) => raw.len() >= len,
+            ParamSource::Shared(raw) => raw.len() >= len,
+        }
+    }
     #[inline(always)]
     pub fn float(&self, offset: usize) -> L {
         match self.source {
@@ -253,6 +261,9 @@ pub trait Model: Send + Sync + 'static {
     fn decode(params: &[f32], out: &mut [f32]) {
         out.copy_from_slice(params);
     }
+    /// The leading part of the decoded block that `eval` and `sample` read: blocks
+    /// staged per lane for them stop there (what follows only `albedo` reads).
+    const LANE_DECODED_LEN: usize = Self::DECODED_LEN;
 
     /// A decoded block as the model's functions read it.
     type Prepared<L: Lane>;
@@ -290,6 +301,11 @@ pub trait LobeType: Send + Sync {
     /// Length of this type's decoded parameter block.
     fn decoded_len(&self) -> usize {
         crate::params::block_size(self.params())
+    }
+    /// The leading part of a decoded block that eval and sample read
+    /// ([`Model::LANE_DECODED_LEN`]).
+    fn lane_decoded_len(&self) -> usize {
+        self.decoded_len()
     }
     /// Decode a validated parameter block once (closures store the result; the
     /// `*_decoded` calls and the batch jobs read it). The default copies it.
@@ -455,6 +471,9 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn decoded_len(&self) -> usize {
         M::DECODED_LEN
+    }
+    fn lane_decoded_len(&self) -> usize {
+        M::LANE_DECODED_LEN
     }
     fn decode(&self, params: &[f32], out: &mut [f32]) {
         M::decode(params, out);

@@ -221,10 +221,11 @@ impl Kernels {
 
     /// The widest ISA this CPU supports.
     pub fn best() -> Kernels {
-        Kernels::available()
-            .last()
-            .copied()
-            .unwrap_or(Kernels::scalar())
+        Isa::ALL
+            .iter()
+            .rev()
+            .find(|isa| isa.is_supported())
+            .map_or(Kernels::scalar(), |&isa| Kernels { isa })
     }
 
     /// Every ISA this CPU supports, narrowest first.
