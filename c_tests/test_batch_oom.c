@@ -226,6 +226,11 @@ static void child(void)
     glint_runtime *rt = NULL;
     glint_arena *arena = NULL;
     glint_closure *closures[SHAPES];
+    glint_closure *grown = NULL;
+    const glint_frame frame = {{0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f}};
+    const float weight[3] = {1.0f, 1.0f, 1.0f};
+    uint32_t conductor = 0;
+    glint_status status;
     lanes *l = calloc(1, sizeof *l);
     struct rlimit limit;
     outputs warm;
@@ -235,7 +240,8 @@ static void child(void)
     CHILD_CHECK(l != NULL, "calloc");
     /* threads=1: batches stay on this thread, whose heap is the one filled. */
     CHILD_CHECK(glint_runtime_create("threads=1", &rt) == GLINT_OK, "runtime");
-    CHILD_CHECK(glint_arena_create(SHAPES, &arena) == GLINT_OK, "arena");
+    CHILD_CHECK(glint_arena_create(SHAPES + 1, &arena) == GLINT_OK, "arena");
+    CHILD_CHECK(glint_lobe_type_find(rt, "conductor", &conductor) == GLINT_OK, "conductor");
     for (i = 0; i < SHAPES; i++)
         CHILD_CHECK(glint_closure_from_json(rt, arena, json[i], NULL, &closures[i]) ==
                         GLINT_OK,
@@ -272,9 +278,30 @@ static void child(void)
     heap = check_batches_run_out(l, heap, 1, "could not be allocated", "heap full");
     check_batches_work(l, SMALL, &warm, "small batch, heap full");
 
-    /* Memory back: the whole batch works. */
+    /* A closure's lobes and blocks live in storage it grows: none to be had is an error,
+     * and the closure stays as it was (empty, still open). */
+    heap = fill_heap_completely(heap);
+    status = glint_closure_begin(rt, arena, NULL, 0, &grown);
+    CHILD_CHECK(status == GLINT_OK, "begin on a fresh slot, heap full -> %u", (unsigned)status);
+    status = glint_closure_add_lobe(grown, conductor, weight, &frame, NULL, 0, NULL);
+    CHILD_CHECK(status == GLINT_ERROR_OUT_OF_MEMORY, "add_lobe, heap full -> %u",
+                (unsigned)status);
+    CHILD_CHECK(strstr(glint_last_error(), "out of memory") != NULL, "add_lobe, heap full");
+
+    /* Memory back: the whole batch works, and so does the closure. */
     free_list(heap);
     check_batches_work(l, COUNT, &warm, "memory freed");
+    CHILD_CHECK(glint_closure_add_lobe(grown, conductor, weight, &frame, NULL, 0, NULL) ==
+                    GLINT_OK,
+                "add_lobe, memory freed");
+    CHILD_CHECK(glint_closure_finish(grown) == GLINT_OK, "finish, memory freed");
+    {
+        const glint_vec3 wo = {0.0f, 0.6f, 0.8f}, wi = {0.0f, -0.6f, 0.8f};
+        glint_eval_result r;
+        r.struct_size = sizeof r;
+        CHILD_CHECK(glint_eval(grown, wo, wi, &r) == GLINT_OK && r.value[0] > 0.0f,
+                    "eval, memory freed");
+    }
     fprintf(stderr, "child: OK\n");
     free(l);
     glint_arena_destroy(arena);
