@@ -171,7 +171,10 @@ impl<L: Lane> Settle<L> for ToWorld<L> {
     #[inline(always)]
     fn settle(&mut self, wi: Vec3<L>) -> Vec3<L> {
         self.world = self.frame.to_world(wi).normalize();
-        self.frame.to_local(self.world)
+        // The local direction as an eval given `world` computes it: every eval path
+        // normalizes its input, and normalizing a unit vector can still move its last
+        // bit, which a narrow lobe would amplify.
+        self.frame.to_local(self.world.normalize())
     }
 }
 
@@ -346,12 +349,14 @@ pub trait LobeType: Send + Sync {
     ) -> Sample<f32> {
         let wo = frame.to_local(wo);
         let mut s = self.sample_decoded(decoded, wo, u, mode);
-        let world = frame.to_world(s.wi).normalize();
+        // Valued at the direction returned, as the built-in lobes' samples are.
+        let mut settle = ToWorld::new(LaneFrame::splat(frame));
+        let wi = settle.settle(s.wi);
         if s.valid && !s.delta {
-            let e = self.eval_decoded(decoded, wo, frame.to_local(world), mode);
+            let e = self.eval_decoded(decoded, wo, wi, mode);
             (s.value, s.pdf) = (e.value, e.pdf);
         }
-        s.wi = world;
+        s.wi = settle.world;
         s.finish()
     }
     /// [`LobeType::albedo`] from a decoded block.

@@ -353,8 +353,8 @@ fn consistency(
 const CLOSURE_CONSISTENCY_COS: [f32; 5] = [0.7, 0.3, 0.05, 0.02, 0.005];
 
 /// Largest relative mismatch between a closure's sample and the closure's `eval` at
-/// the world-space `wi` it returns, for the lobe alone in a tilted frame (so that
-/// world and local directions differ in every component).
+/// the world-space `wi` it returns, as a host passes it back, for the lobe alone in a
+/// tilted frame (so that world and local directions differ in every component).
 fn closure_consistency(lobe: &LobeRef, p: &[f32], budget: &Budget, rng: &mut Rng) -> f64 {
     let frame = Frame::new(
         Vec3::new(0.3f32, -0.5, 0.8).normalize(),
@@ -378,7 +378,10 @@ fn closure_consistency(lobe: &LobeRef, p: &[f32], budget: &Budget, rng: &mut Rng
             if s.flags & flags::SPECULAR != 0 {
                 continue;
             }
-            let e = closure.eval(wo, s.wi).expect("finished closure");
+            // `wi` as a host's eval reads it: the C calls and the batch kernels
+            // normalize the directions they are given (`Vec3::try_unit`'s rule).
+            let wi = Vec3::try_unit(s.wi.x, s.wi.y, s.wi.z, "wi").expect("a unit sample");
+            let e = closure.eval(wo, wi).expect("finished closure");
             let value = rgb64(s.value)
                 .iter()
                 .zip(rgb64(e.value))
