@@ -389,7 +389,9 @@ pub unsafe extern "C" fn glint_closure_begin(
 /// Add a lobe of type `type_id` with RGB `weight` (>= 0) in `frame`. `params` holds
 /// the lobe type's whole parameter block (`param_count == param_block_size`; see
 /// `glint_lobe_param_info`), or is NULL with `param_count == 0` for the defaults.
-/// `out_index` (may be NULL) receives the lobe's index in the closure.
+/// `out_index` (may be NULL) receives the lobe's index in the closure. A closure's
+/// storage grows with its lobes (its arena slot keeps it across resets); memory short
+/// for it is `GLINT_ERROR_OUT_OF_MEMORY`, the closure unchanged and still open.
 ///
 /// # Safety
 /// `closure` is NULL or live and not finished elsewhere; `weight` NULL or 3 floats;
