@@ -153,12 +153,12 @@ batch_args!(
     glint_albedo_batch_args
 );
 
-#[inline]
 /// `count` elements at `p`, which must not be NULL. `what` is formatted only for the
 /// error: a batch call allocates nothing but its staging, which may fail.
 ///
 /// # Safety
 /// `p` is NULL or valid for `count` reads.
+#[inline]
 unsafe fn input<'a, T>(p: *const T, count: usize, what: impl Display) -> Result<&'a [T], Error> {
     if p.is_null() {
         return Err(null(what));
@@ -167,11 +167,11 @@ unsafe fn input<'a, T>(p: *const T, count: usize, what: impl Display) -> Result<
     Ok(unsafe { std::slice::from_raw_parts(p, count) })
 }
 
-#[inline]
 /// `count` writable elements at `p`, which must not be NULL (`what` as for [`input`]).
 ///
 /// # Safety
 /// `p` is NULL or valid for `count` writes and not aliased by another output.
+#[inline]
 unsafe fn output<'a, T>(p: *mut T, count: usize, what: impl Display) -> Result<&'a mut [T], Error> {
     if p.is_null() {
         return Err(null(what));
@@ -253,9 +253,9 @@ unsafe fn lanes<'a>(
     }
 }
 
-#[inline]
 /// # Safety
 /// `x`, `y`, `z` are NULL or valid for `count` reads.
+#[inline]
 unsafe fn soa_in<'a>(
     x: *const f32,
     y: *const f32,
@@ -273,9 +273,9 @@ unsafe fn soa_in<'a>(
     }
 }
 
-#[inline]
 /// # Safety
 /// `x`, `y`, `z` are NULL or valid for `count` writes and unaliased.
+#[inline]
 unsafe fn soa_out<'a>(
     x: *mut f32,
     y: *mut f32,

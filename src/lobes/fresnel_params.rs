@@ -2,10 +2,10 @@
 //! one schema, one decoder, so every lobe names and reads them the same way.
 
 use super::Params;
-use crate::albedo_table::FresnelNodes;
+use crate::albedo_table::{FRESNEL_NODES, FresnelNodes};
 use crate::fresnel::FresnelModel;
 use crate::kernels;
-use crate::math::Lane;
+use crate::math::{Lane, Rgb};
 use crate::simd::Kernels;
 
 /// Choices of the `fresnel` parameter.
@@ -98,7 +98,7 @@ pub fn read_nodes<L: Lane>(
     }
     let mut nodes = FresnelNodes {
         f0: decoded.rgb(at),
-        departures: [crate::math::Rgb::splat(L::zero()); crate::albedo_table::FRESNEL_NODES],
+        departures: [Rgb::splat(L::zero()); FRESNEL_NODES],
     };
     for (j, d) in nodes.departures.iter_mut().enumerate() {
         *d = decoded.rgb(at + 3 * (j + 1));

@@ -209,10 +209,11 @@ impl<'a, L: Lane> Params<'a, L> {
     /// Whether the block holds `len` values.
     #[inline(always)]
     pub fn holds(&self, len: usize) -> bool {
-        match self.source {
-            ParamSource::Lanes(raw) => raw.len() >= len,
-            ParamSource::Shared(raw) => raw.len() >= len,
-        }
+        let held = match self.source {
+            ParamSource::Lanes(raw) => raw.len(),
+            ParamSource::Shared(raw) => raw.len(),
+        };
+        held >= len
     }
     #[inline(always)]
     pub fn float(&self, offset: usize) -> L {
