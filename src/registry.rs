@@ -16,7 +16,7 @@ use std::ops::Deref;
 use std::sync::Arc;
 
 /// Every built-in lobe type, in registration (id) order.
-pub static BUILTINS: [&(dyn LobeType + 'static); 4] = [
+pub static BUILTINS: &[&(dyn LobeType + 'static)] = &[
     &Builtin::<Lambert>::new(),
     &Builtin::<Conductor>::new(),
     &Builtin::<Dielectric>::new(),
