@@ -70,7 +70,9 @@ fn closure(c: &mut Criterion) {
     let json = r#"{"lobes": [
         {"type": "lambert", "weight": 0.5},
         {"type": "conductor", "roughness": 0.3, "fresnel": "artistic"}]}"#;
-    let closure = glint::json::closure_from_json(&registry, json, None).expect("valid closure");
+    let closure =
+        glint::json::closure_from_json(&registry, json, None, glint::materials::DEFAULT_PRUNE)
+            .expect("valid closure");
     let mut group = c.benchmark_group("closure_lambert_conductor");
     group.throughput(Throughput::Elements(N as u64));
     group.bench_function("eval", |b| {

@@ -83,6 +83,13 @@ typedef struct glint_arena glint_arena;
 typedef struct glint_closure glint_closure;
 
 /*
+ A compiled material: a material type with its parameters validated and resolved
+ once (`glint_material_create`). Immutable and thread-safe; a small shell (see
+ `handle`) around the material.
+ */
+typedef struct glint_material glint_material;
+
+/*
  The runtime handle: a small shell (see `handle`) around what the runtime owns.
  */
 typedef struct glint_runtime glint_runtime;
@@ -292,29 +299,25 @@ typedef struct glint_sample_result {
 } glint_sample_result;
 
 /*
- Description of a lobe type.
+ Description of a material type.
  */
-typedef struct glint_lobe_info {
+typedef struct glint_material_info {
   /*
-   Set by the caller to `sizeof(glint_lobe_info)`.
+   Set by the caller to `sizeof(glint_material_info)`.
    */
   uint32_t struct_size;
   const char *name;
   const char *summary;
-  /*
-   Every `GLINT_FLAG_*` a sample of this lobe may carry.
-   */
-  uint32_t flags;
-  /*
-   1 when `f(wo, wi) == f(wi, wo)`.
-   */
-  uint32_t reciprocal;
   uint32_t param_count;
   /*
-   Floats in the parameter block `glint_closure_add_lobe` takes.
+   Floats in the parameter block `glint_material_create_from_params` takes.
    */
   uint32_t param_block_size;
-} glint_lobe_info;
+  /*
+   Most lobes one shading point's closure holds.
+   */
+  uint32_t lobe_count;
+} glint_material_info;
 
 /*
  Description of one parameter of a lobe type.
@@ -353,6 +356,79 @@ typedef struct glint_param_info {
   const char *choices;
   const char *doc;
 } glint_param_info;
+
+/*
+ Where and how a surface is seen, world space. Begins with `struct_size`, so
+ fields can be added; a material reads what it needs (the Disney material reads
+ `wo` and the frame), but every field given must be valid.
+ */
+typedef struct glint_shading_context {
+  /*
+   Set by the caller to `sizeof(glint_shading_context)`.
+   */
+  uint32_t struct_size;
+  /*
+   Toward the viewer (need not be normalized).
+   */
+  struct glint_vec3 wo;
+  /*
+   The shading frame: normal and an optional tangent (all zeros: automatic), as
+   in `glint_frame`.
+   */
+  struct glint_vec3 normal;
+  struct glint_vec3 tangent;
+  /*
+   The geometric normal (all zeros: the shading normal).
+   */
+  struct glint_vec3 geometric_normal;
+  struct glint_vec3 position;
+  /*
+   The position in the object's reference (rest) space.
+   */
+  struct glint_vec3 reference_position;
+  /*
+   Radius of the pixel's footprint on the surface, >= 0.
+   */
+  float footprint;
+  float uv[2];
+} glint_shading_context;
+
+/*
+ A textured parameter of one shading point: parameter `param` (its index in the
+ material type's schema, see `glint_material_param_info`) of type `param_type`
+ (`GLINT_PARAM_*`, checked against the schema) set to `value` (`value[0]` for
+ FLOAT and ENUM).
+ */
+typedef struct glint_override {
+  uint32_t param;
+  uint32_t param_type;
+  float value[3];
+} glint_override;
+
+/*
+ Description of a lobe type.
+ */
+typedef struct glint_lobe_info {
+  /*
+   Set by the caller to `sizeof(glint_lobe_info)`.
+   */
+  uint32_t struct_size;
+  const char *name;
+  const char *summary;
+  /*
+   Every `GLINT_FLAG_*` a sample of this lobe may carry.
+   */
+  uint32_t flags;
+  /*
+   1 when `f(wo, wi) == f(wi, wo)`.
+   */
+  uint32_t reciprocal;
+  uint32_t param_count;
+  /*
+   Floats in the parameter block `glint_closure_add_lobe` takes.
+   */
+  uint32_t param_block_size;
+} glint_lobe_info;
 
 #define GLINT_OK 0
 
@@ -633,6 +709,91 @@ glint_status glint_pdf_lobe(const struct glint_closure *closure, uint32_t lobe, 
 glint_status glint_albedo_lobe(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, float *out);
 
 /*
+ Number of material types; their ids are `0 .. count - 1`.
+
+ # Safety
+ `runtime` is NULL or valid; `out` is NULL or writable.
+ */
+glint_status glint_material_type_count(const struct glint_runtime *runtime, uint32_t *out);
+
+/*
+ The id of the material type named `name`.
+
+ # Safety
+ `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
+ */
+glint_status glint_material_type_find(const struct glint_runtime *runtime, const char *name, uint32_t *out);
+
+/*
+ Describe material type `id`. The strings live as long as the runtime.
+
+ # Safety
+ `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
+ */
+glint_status glint_material_type_info(const struct glint_runtime *runtime, uint32_t id, struct glint_material_info *out);
+
+/*
+ Describe parameter `index` of material type `id` (as `glint_lobe_param_info`).
+
+ # Safety
+ `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
+ */
+glint_status glint_material_param_info(const struct glint_runtime *runtime, uint32_t id, uint32_t index, struct glint_param_info *out);
+
+/*
+ The index of the parameter named `name` of material type `id`.
+
+ # Safety
+ `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
+ */
+glint_status glint_material_param_find(const struct glint_runtime *runtime, uint32_t id, const char *name, uint32_t *out);
+
+/*
+ Compile a material from its JSON description, `{"material": "disney",
+ "base_color": [0.8, 0.1, 0.1], ...}` (every key but `material` a parameter of the
+ type's schema; see the README): validated and resolved once, for every shading
+ point of a scene material. Free it with `glint_material_destroy`.
+
+ # Safety
+ `runtime` is NULL or live; `json_text` NULL or NUL-terminated; `out` NULL or writable.
+ */
+glint_status glint_material_create(const struct glint_runtime *runtime, const char *json_text, struct glint_material **out);
+
+/*
+ Compile material type `type_id` with `params`, its whole parameter block
+ (`param_count == param_block_size`, see `glint_material_param_info`), or NULL with
+ `param_count == 0` for the defaults.
+
+ # Safety
+ `runtime` is NULL or live; `params` NULL or `param_count` floats; `out` NULL or writable.
+ */
+glint_status glint_material_create_from_params(const struct glint_runtime *runtime, uint32_t type_id, const float *params, size_t param_count, struct glint_material **out);
+
+/*
+ Destroy a material (NULL is ignored). Closures built from it stay valid. A call
+ with the destroyed handle returns `GLINT_ERROR_INVALID_HANDLE` while its shell is
+ quarantined (as runtimes and arenas are; see `glint_runtime_destroy`).
+
+ # Safety
+ `material` is NULL or a handle from a material constructor.
+ */
+void glint_material_destroy(struct glint_material *material);
+
+/*
+ Build (and finish) the closure of one shading point of `material` in `arena`:
+ `overrides` (NULL with `override_count == 0` for none) set textured parameters
+ for this point; the material expands into weighted lobes in the context's frame,
+ drops those whose `luminance(weight * albedo(wo))` is below the runtime's `prune=`
+ threshold, and fixes lobe selection from the rest. The context and overrides are
+ checked before the arena is touched, so a failing call uses no slot.
+
+ # Safety
+ Handles are NULL or live; `context` NULL or readable; `overrides` NULL or valid
+ for `override_count` entries; `out` NULL or writable.
+ */
+glint_status glint_material_closure(const struct glint_material *material, struct glint_arena *arena, const struct glint_shading_context *context, const struct glint_override *overrides, size_t override_count, struct glint_closure **out);
+
+/*
  The library version as `MAJOR * 10000 + MINOR * 100 + PATCH`.
  */
 uint32_t glint_version(void);
@@ -652,8 +813,10 @@ const char *glint_last_error(void);
  Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
  commas or semicolons; valid keys: `isa` (`auto` | `scalar` | `avx2` | `avx512`;
  an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`) and `threads` (0 = one per
- core, the default; 1 = batch calls stay on the calling thread; N = a pool of N) and
- `plugins` (a directory whose `*.so` plugins are loaded, in file-name order).
+ core, the default; 1 = batch calls stay on the calling thread; N = a pool of N),
+ `plugins` (a directory whose `*.so` plugins are loaded, in file-name order) and
+ `prune` (in [0, 1], default 0.001: materials do not emit a lobe whose
+ `luminance(weight * albedo(wo))` is below it).
 
  # Safety
  `config` is NULL or a NUL-terminated string; `out` is valid for writes.

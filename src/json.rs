@@ -21,13 +21,19 @@
 use crate::closure::Closure;
 use crate::error::{Error, Status};
 use crate::lobes::Transport;
+use crate::materials::{Material, ShadingContext};
+use crate::math::Rgb;
 use crate::math::{Frame, Vec3};
-use crate::params::{self, ParamKind};
+use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::Registry;
 use serde::de::{self, Deserialize, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::{Map, Number, Value};
 
 const LOBE_KEYS: &[&str] = &["type", "weight", "normal", "tangent"];
+const MATERIAL_KEY: &str = "material";
+/// Keys of a material entry besides its parameters (a material document alone takes
+/// only `material`).
+const MATERIAL_ENTRY_KEYS: &[&str] = &[MATERIAL_KEY, "weight", "normal", "tangent"];
 const TOP_KEYS: &[&str] = &["lobes", "transport"];
 
 fn parse_error(message: String) -> Error {
@@ -98,18 +104,36 @@ impl<'de> Visitor<'de> for StrictVisitor {
     }
 }
 
-/// Build (and finish) a closure from its JSON description.
+/// The root object of a JSON document.
+fn parse_root(text: &str, what: &str) -> Result<Map<String, Value>, Error> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let Strict(root) =
+        serde_json::from_str(text).map_err(|e| parse_error(format!("malformed JSON: {e}")))?;
+    match root {
+        Value::Object(obj) => Ok(obj),
+        _ => Err(parse_error(format!("{what} must be a JSON object"))),
+    }
+}
+
+/// Build (and finish) a closure from its JSON description: a `"lobes"` array whose
+/// entries are lobes or materials, or one material document. Materials do not emit
+/// lobes below `prune` ([`Material`]).
 pub fn closure_from_json(
     registry: &Registry,
     text: &str,
     wo: Option<Vec3<f32>>,
+    prune: f32,
 ) -> Result<Closure, Error> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let Strict(root) =
-        serde_json::from_str(text).map_err(|e| parse_error(format!("malformed JSON: {e}")))?;
-    let obj = root.as_object().ok_or_else(|| {
-        parse_error("a closure description must be a JSON object with a \"lobes\" array".into())
-    })?;
+    let obj = parse_root(
+        text,
+        "a closure description (with a \"lobes\" array, or a \"material\")",
+    )?;
+    if obj.contains_key(MATERIAL_KEY) {
+        let mut closure = Closure::new(wo, Transport::Radiance);
+        add_material(registry, &mut closure, &obj, None, prune)?;
+        closure.finish()?;
+        return Ok(closure);
+    }
     if let Some(key) = obj.keys().find(|k| !TOP_KEYS.contains(&k.as_str())) {
         return Err(Error::new(
             Status::UnknownName,
@@ -147,7 +171,11 @@ pub fn closure_from_json(
         let lobe = lobe
             .as_object()
             .ok_or_else(|| parse_error(format!("lobes[{i}] must be an object")))?;
-        add_lobe(registry, &mut closure, lobe, i)?;
+        if lobe.contains_key(MATERIAL_KEY) {
+            add_material(registry, &mut closure, lobe, Some(i), prune)?;
+        } else {
+            add_lobe(registry, &mut closure, lobe, i)?;
+        }
     }
     closure.finish()?;
     Ok(closure)
@@ -170,31 +198,53 @@ fn add_lobe(
     let specs = lobe_type.params();
     let at = |key: &str| format!("lobes[{i}] ({name}).{}", quoted(key));
 
-    let weight = match lobe.get("weight") {
+    let (weight, frame) = placement(lobe, &at)?;
+    let block = read_block(specs, lobe, LOBE_KEYS, name, &at)?;
+    closure.add_lobe(registry, type_id, weight, frame, Some(&block))?;
+    Ok(())
+}
+
+/// The `weight`, `normal` and `tangent` of a lobe or material entry.
+fn placement(
+    entry: &Map<String, Value>,
+    at: &dyn Fn(&str) -> String,
+) -> Result<([f32; 3], Frame), Error> {
+    let weight = match entry.get("weight") {
         None => [1.0; 3],
         Some(v) => rgb(v, &at("weight"))?,
     };
-    let normal = match lobe.get("normal") {
+    let normal = match entry.get("normal") {
         None => Vec3::splat(0.0, 0.0, 1.0),
         Some(v) => vector(v, &at("normal"))?,
     };
     // All zeros: automatic, as in the C API (`glint_frame`).
-    let tangent = match lobe.get("tangent") {
+    let tangent = match entry.get("tangent") {
         None => None,
         Some(v) => match triple(v, &at("tangent"))? {
             t if t == [0.0; 3] => None,
             [x, y, z] => Some(Vec3::try_unit(x, y, z, &at("tangent"))?),
         },
     };
+    Ok((weight, Frame::new(normal, tangent)))
+}
 
+/// A parameter block laid out by `specs`: the defaults, with every key of `entry`
+/// but `reserved` set (an unknown key is an error listing the valid ones).
+fn read_block(
+    specs: &[ParamSpec],
+    entry: &Map<String, Value>,
+    reserved: &[&str],
+    name: &str,
+    at: &dyn Fn(&str) -> String,
+) -> Result<Vec<f32>, Error> {
     let mut block = vec![0.0f32; params::block_size(specs)];
     params::write_defaults(specs, &mut block);
-    for (key, value) in lobe {
-        if LOBE_KEYS.contains(&key.as_str()) {
+    for (key, value) in entry {
+        if reserved.contains(&key.as_str()) {
             continue;
         }
         let index = specs.iter().position(|s| s.name == key).ok_or_else(|| {
-            let valid: Vec<&str> = LOBE_KEYS
+            let valid: Vec<&str> = reserved
                 .iter()
                 .copied()
                 .chain(specs.iter().map(|s| s.name))
@@ -226,14 +276,73 @@ fn add_lobe(
             }
         }
     }
-    closure.add_lobe(
-        registry,
-        type_id,
-        weight,
-        Frame::new(normal, tangent),
-        Some(&block),
-    )?;
+    Ok(block)
+}
+
+/// The material a document or entry names, compiled, and its `at` prefix.
+fn read_material(
+    registry: &Registry,
+    entry: &Map<String, Value>,
+    reserved: &[&str],
+    index: Option<usize>,
+    prune: f32,
+) -> Result<Material, Error> {
+    let prefix = index.map_or(String::new(), |i| format!("lobes[{i}] "));
+    let name = entry
+        .get(MATERIAL_KEY)
+        .and_then(Value::as_str)
+        .ok_or_else(|| {
+            parse_error(format!(
+                "{prefix}\"material\" must be a string; valid materials: {}",
+                registry.material_names().join(", ")
+            ))
+        })?;
+    let type_id = registry.find_material(name)?;
+    let specs = registry.material(type_id)?.params();
+    let at = |key: &str| format!("{prefix}({name}).{}", quoted(key));
+    let block = read_block(specs, entry, reserved, name, &at)?;
+    Material::new(registry, type_id, Some(&block), prune)
+}
+
+/// Expand a material entry (or a whole material document, `index` None) into
+/// `closure` at its `wo` (normal incidence without one), its lobes scaled by the
+/// entry's `weight`.
+fn add_material(
+    registry: &Registry,
+    closure: &mut Closure,
+    entry: &Map<String, Value>,
+    index: Option<usize>,
+    prune: f32,
+) -> Result<(), Error> {
+    let reserved = if index.is_some() {
+        MATERIAL_ENTRY_KEYS
+    } else {
+        &MATERIAL_ENTRY_KEYS[..1]
+    };
+    let material = read_material(registry, entry, reserved, index, prune)?;
+    let prefix = index.map_or(String::new(), |i| format!("lobes[{i}] "));
+    let at = |key: &str| format!("{prefix}({}).{}", material.kind().name(), quoted(key));
+    let (weight, frame) = placement(entry, &at)?;
+    let wo = closure.view().unwrap_or(frame.n);
+    let ctx = ShadingContext::new(wo, frame);
+    material.emit(closure, &ctx, material.params(), Rgb::from_array(weight))?;
     Ok(())
+}
+
+/// Compile a material from its JSON document: `{"material": "disney", ...}`, every
+/// other key a parameter of the material type's schema (as lobe parameters are read).
+pub fn material_from_json(registry: &Registry, text: &str, prune: f32) -> Result<Material, Error> {
+    let obj = parse_root(
+        text,
+        "a material description (with a \"material\" type name)",
+    )?;
+    if !obj.contains_key(MATERIAL_KEY) {
+        return Err(parse_error(format!(
+            "a material description needs a \"material\" key; valid materials: {}",
+            registry.material_names().join(", ")
+        )));
+    }
+    read_material(registry, &obj, &[MATERIAL_KEY], None, prune)
 }
 
 fn number(v: &Value, what: &str) -> Result<f32, Error> {

@@ -11,6 +11,7 @@ pub mod fresnel;
 pub mod json;
 pub mod kernels;
 pub mod lobes;
+pub mod materials;
 pub mod math;
 pub mod microfacet;
 pub mod params;

@@ -12,6 +12,7 @@ use crate::lobes::dielectric::Dielectric;
 use crate::lobes::lambert::Lambert;
 use crate::lobes::mirror::Mirror;
 use crate::lobes::{Builtin, LobeType};
+use crate::materials::{BUILTIN_MATERIALS, MaterialType};
 use std::ops::Deref;
 use std::sync::Arc;
 
@@ -53,6 +54,7 @@ impl From<&'static dyn LobeType> for LobeRef {
 /// The lobe types a runtime knows; ids are indices.
 pub struct Registry {
     types: Vec<LobeRef>,
+    materials: Vec<&'static dyn MaterialType>,
 }
 
 impl Registry {
@@ -60,6 +62,7 @@ impl Registry {
     pub fn with_builtins() -> Registry {
         Registry {
             types: BUILTINS.iter().map(|&lobe| LobeRef::Static(lobe)).collect(),
+            materials: BUILTIN_MATERIALS.to_vec(),
         }
     }
 
@@ -125,5 +128,46 @@ impl Registry {
 
     pub fn iter(&self) -> impl Iterator<Item = &LobeRef> {
         self.types.iter()
+    }
+
+    /// The material type with id `id`.
+    pub fn material(&self, id: u32) -> Result<&'static dyn MaterialType, Error> {
+        self.materials.get(id as usize).copied().ok_or_else(|| {
+            Error::new(
+                Status::OutOfRange,
+                format!(
+                    "material type id {id} does not exist (the registry has {})",
+                    self.materials.len()
+                ),
+            )
+        })
+    }
+
+    /// The id of the material type named `name`; the error lists the valid names.
+    pub fn find_material(&self, name: &str) -> Result<u32, Error> {
+        self.materials
+            .iter()
+            .position(|m| m.name() == name)
+            .map(|i| i as u32)
+            .ok_or_else(|| {
+                Error::new(
+                    Status::UnknownName,
+                    format!(
+                        "unknown material type {}; valid types: {}",
+                        crate::json::quoted(name),
+                        self.material_names().join(", ")
+                    ),
+                )
+            })
+    }
+
+    /// Names of all material types, in id order.
+    pub fn material_names(&self) -> Vec<&str> {
+        self.materials.iter().map(|m| m.name()).collect()
+    }
+
+    /// Material types, in id order.
+    pub fn materials(&self) -> &[&'static dyn MaterialType] {
+        &self.materials
     }
 }

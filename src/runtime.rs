@@ -27,6 +27,9 @@ pub struct Settings {
     pub threads: usize,
     /// A directory whose `*.so` plugins are loaded when the runtime is created.
     pub plugins: Option<String>,
+    /// Materials do not emit a lobe whose `luminance(weight * albedo(wo))` is below
+    /// this (`prune=`, in [0, 1]; default `materials::DEFAULT_PRUNE`).
+    pub prune: f32,
 }
 
 impl Default for Settings {
@@ -35,12 +38,13 @@ impl Default for Settings {
             isa: IsaSetting::Auto,
             threads: 0,
             plugins: None,
+            prune: crate::materials::DEFAULT_PRUNE,
         }
     }
 }
 
 /// Configuration keys `Settings::parse` accepts.
-pub const CONFIG_KEYS: &[&str] = &["isa", "threads", "plugins"];
+pub const CONFIG_KEYS: &[&str] = &["isa", "threads", "plugins", "prune"];
 
 /// Most threads `threads=N` accepts.
 pub const MAX_THREADS: usize = 1024;
@@ -97,6 +101,18 @@ impl Settings {
                         })?
                 }
                 "plugins" => settings.plugins = Some(value.to_string()),
+                "prune" => {
+                    settings.prune = value
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|p| (0.0..=1.0).contains(p))
+                        .ok_or_else(|| {
+                            Error::new(
+                                Status::OutOfRange,
+                                format!("prune={value}: valid values: a number in [0, 1]"),
+                            )
+                        })?
+                }
                 _ => {
                     return Err(Error::new(
                         Status::UnknownName,

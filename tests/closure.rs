@@ -703,7 +703,12 @@ fn lobe_weights_above_the_bound_are_refused() {
         assert!(e.message.contains("weight[0]"), "{}", e.message);
     }
     let json = r#"{"lobes": [{"type": "lambert", "weight": [1, 3e38, 1]}]}"#;
-    let Err(e) = glint::json::closure_from_json(&Registry::with_builtins(), json, None) else {
+    let Err(e) = glint::json::closure_from_json(
+        &Registry::with_builtins(),
+        json,
+        None,
+        glint::materials::DEFAULT_PRUNE,
+    ) else {
         panic!("JSON weight 3e38 accepted");
     };
     assert_eq!(e.status, Status::OutOfRange, "{}", e.message);

@@ -13,7 +13,12 @@ use glint::registry::Registry;
 use glint::{Closure, Error, Status};
 
 fn parse(text: &str) -> Result<Closure, Error> {
-    closure_from_json(&Registry::with_builtins(), text, None)
+    closure_from_json(
+        &Registry::with_builtins(),
+        text,
+        None,
+        glint::materials::DEFAULT_PRUNE,
+    )
 }
 
 #[track_caller]
@@ -99,7 +104,7 @@ fn json_closure_evaluates_like_a_hand_built_one() {
           "distribution": "beckmann", "roughness": 0.4, "anisotropic": 0.6, "eta": 1.33 } ] }"#;
     let wo = Vec3::new(0.3, 0.2, (1.0f32 - 0.13).sqrt());
     let registry = Registry::with_builtins();
-    let c = closure_from_json(&registry, text, Some(wo)).unwrap();
+    let c = closure_from_json(&registry, text, Some(wo), glint::materials::DEFAULT_PRUNE).unwrap();
     assert_eq!(c.transport(), Transport::Importance);
     let n = Vec3::new(0.0, 0.6, 0.8);
     let frame = Frame::new(n, Some(Vec3::new(1.0, 0.0, 0.0)));

@@ -133,6 +133,11 @@ impl Closure {
         self.mode = mode;
     }
 
+    /// The `wo` (unit, world space) given at creation, if any.
+    pub fn view(&self) -> Option<Vec3<f32>> {
+        self.wo
+    }
+
     pub fn transport(&self) -> Transport {
         self.mode
     }
@@ -205,12 +210,6 @@ impl Closure {
             ));
         }
         let lobe = registry.get(type_id)?;
-        if self.lobe_count() == MAX_LOBES {
-            return Err(Error::new(
-                Status::ClosureFull,
-                format!("a closure holds at most {MAX_LOBES} lobes"),
-            ));
-        }
         if let Some(i) = weight.iter().position(|w| !w.is_finite() || *w < 0.0) {
             return Err(Error::new(
                 Status::InvalidArgument,
@@ -231,6 +230,34 @@ impl Closure {
                 ),
             ));
         }
+        if let Some(values) = params {
+            params::validate(lobe.name(), lobe.params(), values)?;
+        }
+        self.push_lobe(
+            lobe,
+            type_id,
+            Rgb::new(weight[0], weight[1], weight[2]),
+            frame,
+            params,
+        )
+    }
+
+    /// Add a lobe whose weight and block are known to be valid (a material's
+    /// expansion): only the closure's capacity and memory are checked.
+    pub(crate) fn push_lobe(
+        &mut self,
+        lobe: &LobeRef,
+        type_id: u32,
+        weight: Rgb<f32>,
+        frame: Frame,
+        params: Option<&[f32]>,
+    ) -> Result<usize, Error> {
+        if self.lobe_count() == MAX_LOBES {
+            return Err(Error::new(
+                Status::ClosureFull,
+                format!("a closure holds at most {MAX_LOBES} lobes"),
+            ));
+        }
         let specs = lobe.params();
         let size = params::block_size(specs);
         if self.params_len + size > MAX_PARAM_VALUES {
@@ -240,9 +267,6 @@ impl Closure {
             ));
         }
         let decoded_size = lobe.decoded_len();
-        if let Some(values) = params {
-            params::validate(lobe.name(), specs, values)?;
-        }
         self.lobes.try_reserve(1).map_err(|_| out_of_memory())?;
         let start = self.values.len();
         self.values
@@ -258,7 +282,7 @@ impl Closure {
         self.lobes.push(LobeInstance {
             lobe: lobe.clone(),
             type_id,
-            weight: Rgb::new(weight[0], weight[1], weight[2]),
+            weight,
             frame,
             params_start: start as u16,
             params_len: size as u16,
@@ -270,8 +294,34 @@ impl Closure {
         Ok(self.lobe_count() - 1)
     }
 
+    /// Remove the last lobe added (a material's lobe that the pruning rule drops).
+    pub(crate) fn pop_lobe(&mut self) {
+        if let Some(l) = self.lobes.pop() {
+            self.values.truncate(l.params_start as usize);
+            self.params_len -= l.params_len as usize;
+        }
+    }
+
     /// Fix the lobe selection probabilities; the closure is immutable afterwards.
     pub fn finish(&mut self) -> Result<(), Error> {
+        let n = self.lobe_count();
+        let mut shares = [0.0f32; MAX_LOBES];
+        // One lobe is chosen with probability 1 whatever its albedo.
+        if n > 1 && !self.finished {
+            for (k, l) in self.lobes().iter().enumerate() {
+                let wo = self
+                    .wo
+                    .map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
+                let albedo = l.lobe.albedo_decoded(self.lobe_decoded(k), wo, self.mode);
+                shares[k] = (l.weight * albedo).luminance();
+            }
+        }
+        self.finish_with_shares(&shares[..n])
+    }
+
+    /// [`Self::finish`] with each lobe's `luminance(weight * albedo(wo))` already known
+    /// (a material computes them to prune its lobes).
+    pub(crate) fn finish_with_shares(&mut self, shares: &[f32]) -> Result<(), Error> {
         if self.finished {
             return Err(Error::new(
                 Status::InvalidState,
@@ -279,31 +329,23 @@ impl Closure {
             ));
         }
         let n = self.lobe_count();
+        let mut shares: [f32; MAX_LOBES] =
+            std::array::from_fn(|k| shares.get(k).map_or(0.0, |s| s.max(0.0)));
         if n == 1 {
-            // One lobe is chosen with probability 1 whatever its albedo.
-            self.lobes[0].probability = 1.0;
-        } else {
-            let mut shares = [0.0f32; MAX_LOBES];
+            shares[0] = 1.0;
+        }
+        // Without any reflecting lobe at this wo, fall back to the weights, then to
+        // uniform.
+        if shares[..n].iter().sum::<f32>() <= 0.0 {
             for (k, l) in self.lobes().iter().enumerate() {
-                let wo = self
-                    .wo
-                    .map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
-                let albedo = l.lobe.albedo_decoded(self.lobe_decoded(k), wo, self.mode);
-                shares[k] = (l.weight * albedo).luminance().max(0.0);
+                shares[k] = l.weight.luminance().max(0.0);
             }
-            // Without any reflecting lobe at this wo, fall back to the weights, then to
-            // uniform.
-            if shares[..n].iter().sum::<f32>() <= 0.0 {
-                for (k, l) in self.lobes().iter().enumerate() {
-                    shares[k] = l.weight.luminance().max(0.0);
-                }
-            }
-            if shares[..n].iter().sum::<f32>() <= 0.0 {
-                shares[..n].fill(1.0);
-            }
-            for (lobe, p) in self.lobes.iter_mut().zip(normalize_shares(&shares[..n])) {
-                lobe.probability = p;
-            }
+        }
+        if shares[..n].iter().sum::<f32>() <= 0.0 {
+            shares[..n].fill(1.0);
+        }
+        for (lobe, p) in self.lobes.iter_mut().zip(normalize_shares(&shares[..n])) {
+            lobe.probability = p;
         }
         self.shape_id = self.hash_shape();
         self.finished = true;

@@ -365,6 +365,36 @@ fn place_empty(
     Ok(())
 }
 
+/// Build a closure in the arena's next slot with `build` (which restarts it),
+/// reusing the storage a closure left there, and hand out its handle.
+///
+/// # Safety
+/// `arena` is NULL or a handle from `glint_arena_create`, not used by another thread.
+pub(crate) unsafe fn place_built(
+    runtime: &glint_runtime,
+    arena: *mut glint_arena,
+    out: &mut *mut glint_closure,
+    build: impl FnOnce(&mut Closure) -> Result<(), Error>,
+) -> Result<(), Error> {
+    // SAFETY: per the contract.
+    let arena = unsafe { arena_mut(arena) }?;
+    let generation = arena.generation;
+    let slot = arena.arena.alloc_with(
+        || glint_closure {
+            tag: Tag::new(closure_tag(generation)),
+            closure: Closure::new(None, Transport::Radiance),
+            runtime,
+        },
+        |slot| {
+            slot.tag.set(closure_tag(generation));
+            slot.runtime = runtime;
+        },
+    )?;
+    build(&mut slot.closure)?;
+    *out = encode(slot, generation)?;
+    Ok(())
+}
+
 /// Begin a closure in `arena`. `wo` (world space, toward the viewer) may be NULL; when
 /// given, it fixes view-dependent lobe weights and lobe selection. `flags` is 0 or
 /// `GLINT_CLOSURE_IMPORTANCE`. Add lobes, then call `glint_closure_finish`.
@@ -476,7 +506,10 @@ pub unsafe extern "C" fn glint_closure_from_json(
         let a = unsafe { constructor_args(runtime, arena, wo, out) }?;
         // SAFETY: per the contract.
         let text = unsafe { c_str(json_text, "json_text") }?;
-        let closure = json::closure_from_json(&a.runtime.live()?.runtime.registry, text, a.wo)?;
+        let closure = {
+            let runtime = &a.runtime.live()?.runtime;
+            json::closure_from_json(&runtime.registry, text, a.wo, runtime.settings.prune)?
+        };
         place(a.runtime, a.arena, closure, a.out)
     })
 }

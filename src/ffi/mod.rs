@@ -10,10 +10,12 @@
 mod batch;
 mod closure;
 mod handle;
+mod material;
 mod runtime;
 
 pub use batch::*;
 pub use closure::*;
+pub use material::*;
 pub use runtime::*;
 
 use crate::error::{Error, Status};

@@ -1,14 +1,15 @@
 //! Version, status strings, the runtime and the lobe registry.
 
 use super::*;
-use crate::params::{self, ParamKind};
+use crate::params::{self, ParamKind, ParamSpec};
 use crate::runtime::Runtime;
 use crate::simd::Isa;
 
-/// C strings of one lobe type, made once so the registry can hand out pointers.
-struct LobeStrings {
-    name: CString,
-    summary: CString,
+/// C strings of one lobe or material type, made once so the registry can hand out
+/// pointers.
+pub(crate) struct LobeStrings {
+    pub(crate) name: CString,
+    pub(crate) summary: CString,
     params: Vec<ParamStrings>,
 }
 
@@ -33,13 +34,21 @@ pub struct glint_runtime {
 pub(crate) struct LiveRuntime {
     pub(crate) runtime: Runtime,
     strings: Vec<LobeStrings>,
+    materials: Vec<LobeStrings>,
 }
 
 impl glint_runtime {
     fn new(runtime: Runtime) -> Self {
+        let materials = runtime
+            .registry
+            .materials()
+            .iter()
+            .map(|m| LobeStrings::new(m.name(), m.summary(), m.params()))
+            .collect();
         let mut live = LiveRuntime {
             runtime,
             strings: Vec::new(),
+            materials,
         };
         live.cache_strings();
         glint_runtime {
@@ -67,23 +76,93 @@ impl LiveRuntime {
     /// never move (each `CString` owns its buffer), so pointers handed out stay valid.
     fn cache_strings(&mut self) {
         let known = self.strings.len();
-        self.strings
-            .extend(self.runtime.registry.iter().skip(known).map(|t| {
-                LobeStrings {
-                    name: c_string(t.name()),
-                    summary: c_string(t.summary()),
-                    params: t
-                        .params()
-                        .iter()
-                        .map(|p| ParamStrings {
-                            name: c_string(p.name),
-                            choices: c_string(&p.choices().join("|")),
-                            doc: c_string(p.doc),
-                        })
-                        .collect(),
-                }
-            }));
+        self.strings.extend(
+            self.runtime
+                .registry
+                .iter()
+                .skip(known)
+                .map(|t| LobeStrings::new(t.name(), t.summary(), t.params())),
+        );
     }
+
+    /// The C strings of material type `id` (a valid id).
+    pub(crate) fn material_strings(&self, id: u32) -> &LobeStrings {
+        &self.materials[id as usize]
+    }
+}
+
+impl LobeStrings {
+    fn new(name: &str, summary: &str, params: &[ParamSpec]) -> Self {
+        LobeStrings {
+            name: c_string(name),
+            summary: c_string(summary),
+            params: params
+                .iter()
+                .map(|p| ParamStrings {
+                    name: c_string(p.name),
+                    choices: c_string(&p.choices().join("|")),
+                    doc: c_string(p.doc),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Describe parameter `index` of the type `owner` with schema `specs` and C strings
+/// `strings` (lobe and material types alike).
+pub(crate) fn fill_param_info(
+    owner: &str,
+    specs: &[ParamSpec],
+    strings: &LobeStrings,
+    index: u32,
+    out: &mut glint_param_info,
+) -> Result<(), Error> {
+    let spec = specs.get(index as usize).ok_or_else(|| {
+        Error::new(
+            Status::OutOfRange,
+            format!(
+                "{owner} has {} parameters; index {index} is out of range",
+                specs.len()
+            ),
+        )
+    })?;
+    let s = &strings.params[index as usize];
+    *out = glint_param_info {
+        struct_size: out.struct_size,
+        name: s.name.as_ptr(),
+        param_type: match spec.kind {
+            ParamKind::Float => GLINT_PARAM_FLOAT,
+            ParamKind::Rgb => GLINT_PARAM_RGB,
+            ParamKind::Enum => GLINT_PARAM_ENUM,
+        },
+        offset: params::offset_of(specs, index as usize) as u32,
+        size: spec.kind.size() as u32,
+        default_value: spec.default,
+        min: spec.min,
+        max: spec.max,
+        choice_count: spec.choices().len() as u32,
+        choices: s.choices.as_ptr(),
+        doc: s.doc.as_ptr(),
+    };
+    Ok(())
+}
+
+/// The index of the parameter named `name` in `specs` (of the type `owner`).
+pub(crate) fn param_index(owner: &str, specs: &[ParamSpec], name: &str) -> Result<u32, Error> {
+    specs
+        .iter()
+        .position(|p| p.name == name)
+        .map(|i| i as u32)
+        .ok_or_else(|| {
+            let names: Vec<&str> = specs.iter().map(|p| p.name).collect();
+            Error::new(
+                Status::UnknownName,
+                format!(
+                    "{owner} has no parameter \"{name}\"; valid: {}",
+                    names.join(", ")
+                ),
+            )
+        })
 }
 
 #[cold]
@@ -212,8 +291,10 @@ pub extern "C" fn glint_last_error() -> *const c_char {
 /// Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
 /// commas or semicolons; valid keys: `isa` (`auto` | `scalar` | `avx2` | `avx512`;
 /// an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`) and `threads` (0 = one per
-/// core, the default; 1 = batch calls stay on the calling thread; N = a pool of N) and
-/// `plugins` (a directory whose `*.so` plugins are loaded, in file-name order).
+/// core, the default; 1 = batch calls stay on the calling thread; N = a pool of N),
+/// `plugins` (a directory whose `*.so` plugins are loaded, in file-name order) and
+/// `prune` (in [0, 1], default 0.001: materials do not emit a lobe whose
+/// `luminance(weight * albedo(wo))` is below it).
 ///
 /// # Safety
 /// `config` is NULL or a NUL-terminated string; `out` is valid for writes.
@@ -428,36 +509,7 @@ pub unsafe extern "C" fn glint_lobe_param_info(
         // SAFETY: per the contract.
         let rt = unsafe { runtime_ref(runtime) }?;
         let t = rt.runtime.registry.get(id)?;
-        let specs = t.params();
-        let spec = specs.get(index as usize).ok_or_else(|| {
-            Error::new(
-                Status::OutOfRange,
-                format!(
-                    "{} has {} parameters; index {index} is out of range",
-                    t.name(),
-                    specs.len()
-                ),
-            )
-        })?;
-        let s = &rt.strings[id as usize].params[index as usize];
-        *out = glint_param_info {
-            struct_size: out.struct_size,
-            name: s.name.as_ptr(),
-            param_type: match spec.kind {
-                ParamKind::Float => GLINT_PARAM_FLOAT,
-                ParamKind::Rgb => GLINT_PARAM_RGB,
-                ParamKind::Enum => GLINT_PARAM_ENUM,
-            },
-            offset: params::offset_of(specs, index as usize) as u32,
-            size: spec.kind.size() as u32,
-            default_value: spec.default,
-            min: spec.min,
-            max: spec.max,
-            choice_count: spec.choices().len() as u32,
-            choices: s.choices.as_ptr(),
-            doc: s.doc.as_ptr(),
-        };
-        Ok(())
+        fill_param_info(t.name(), t.params(), &rt.strings[id as usize], index, out)
     })
 }
 
@@ -480,22 +532,7 @@ pub unsafe extern "C" fn glint_lobe_param_find(
         // SAFETY: per the contract.
         let name = unsafe { c_str(name, "name") }?;
         let t = rt.runtime.registry.get(id)?;
-        let index = t
-            .params()
-            .iter()
-            .position(|p| p.name == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = t.params().iter().map(|p| p.name).collect();
-                Error::new(
-                    Status::UnknownName,
-                    format!(
-                        "{} has no parameter \"{name}\"; valid: {}",
-                        t.name(),
-                        names.join(", ")
-                    ),
-                )
-            })?;
-        *out = index as u32;
+        *out = param_index(t.name(), t.params(), name)?;
         Ok(())
     })
 }

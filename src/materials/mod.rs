@@ -1,0 +1,177 @@
+//! Materials: artist parameters that expand, at each shading point, into a few
+//! weighted lobes.
+//!
+//! A material model implements [`MaterialModel`]: its parameter schema (the same
+//! [`ParamSpec`] tables as lobes), the lobe types it may emit (one per *slot*), and
+//! `expand`, written once over the [`Lane`] type like the lobes: given its parameters
+//! and a shading context it writes each slot's weight and lobe parameter block. A slot
+//! whose weight is zero is not emitted. [`BuiltinMaterial`] adapts a model to the
+//! object-safe [`MaterialType`] that the registry lists and [`Material`] (a compiled
+//! material) uses.
+//!
+//! A compiled [`Material`] holds a validated parameter block and its slots' lobe types,
+//! resolved once per scene material. Per shading point it takes overrides (textured
+//! parameters, by index), expands, and builds a closure: each lobe's
+//! `luminance(weight * albedo(wo))` both prunes it (below the runtime's `prune=`
+//! threshold it is not emitted) and sets its selection probability.
+
+pub mod compiled;
+pub mod disney;
+
+pub use compiled::{Material, Override};
+
+use crate::lobes::{Params, VerifyCase};
+use crate::math::{Frame, Lane, Rgb, Vec3};
+use crate::params::ParamSpec;
+use std::marker::PhantomData;
+
+/// Most lobes one material emits.
+pub const MAX_SLOTS: usize = 8;
+/// Most parameter values of one slot's lobe block.
+pub const MAX_SLOT_PARAMS: usize = 16;
+
+/// Default of the `prune=` setting: a lobe whose `luminance(weight * albedo(wo))` is
+/// below it is not emitted.
+pub const DEFAULT_PRUNE: f32 = 1e-3;
+
+/// Where and how a surface is seen, in world space (`glint_shading_context`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingContext {
+    /// Toward the viewer, unit.
+    pub wo: Vec3<f32>,
+    /// The shading frame the material's lobes use.
+    pub frame: Frame,
+    /// Unit geometric normal.
+    pub geometric_normal: Vec3<f32>,
+    pub position: Vec3<f32>,
+    /// The position in the object's reference (rest) space: procedural patterns such
+    /// as glitter stay attached to a deforming surface.
+    pub reference_position: Vec3<f32>,
+    /// Radius of the pixel's footprint on the surface (world units, >= 0).
+    pub footprint: f32,
+    pub uv: [f32; 2],
+}
+
+impl ShadingContext {
+    /// A context with only a view direction and a frame (the rest zero).
+    pub fn new(wo: Vec3<f32>, frame: Frame) -> Self {
+        let zero = Vec3::splat(0.0, 0.0, 0.0);
+        ShadingContext {
+            wo,
+            frame,
+            geometric_normal: frame.n,
+            position: zero,
+            reference_position: zero,
+            footprint: 0.0,
+            uv: [0.0; 2],
+        }
+    }
+
+    /// What `expand` sees: `wo` in the shading frame, the rest as given.
+    pub fn lanes(&self) -> Context<f32> {
+        Context {
+            wo: self.frame.to_local(self.wo),
+            position: self.position,
+            reference_position: self.reference_position,
+            footprint: self.footprint,
+            uv: self.uv,
+        }
+    }
+}
+
+/// The shading context over lanes, as `expand` reads it.
+#[derive(Clone, Copy, Debug)]
+pub struct Context<L> {
+    /// Toward the viewer, in the shading frame (z = normal).
+    pub wo: Vec3<L>,
+    pub position: Vec3<L>,
+    pub reference_position: Vec3<L>,
+    pub footprint: L,
+    pub uv: [L; 2],
+}
+
+/// What `expand` writes: per slot, the lobe's weight (zero: not emitted) and its
+/// parameter block, laid out by the slot's lobe type.
+#[derive(Clone, Copy, Debug)]
+pub struct Expansion<L> {
+    pub weight: [Rgb<L>; MAX_SLOTS],
+    pub params: [[L; MAX_SLOT_PARAMS]; MAX_SLOTS],
+}
+
+impl<L: Lane> Default for Expansion<L> {
+    fn default() -> Self {
+        Expansion {
+            weight: [Rgb::zero(); MAX_SLOTS],
+            params: [[L::zero(); MAX_SLOT_PARAMS]; MAX_SLOTS],
+        }
+    }
+}
+
+/// A material model, written once over the lane type.
+pub trait MaterialModel: Send + Sync + 'static {
+    const NAME: &'static str;
+    /// One line for registries and UIs.
+    const SUMMARY: &'static str;
+    const PARAMS: &'static [ParamSpec];
+    /// The lobe type of each slot, by registered name.
+    const LOBES: &'static [&'static str];
+    /// Parameter sets the verification harness covers besides the defaults.
+    const VERIFY_CASES: &'static [VerifyCase] = &[];
+
+    /// Write each slot's weight and lobe block for `params` (a validated block, with
+    /// overrides applied) seen from `ctx`. Every block written for a nonzero weight
+    /// must be valid for its lobe type's schema (clamped into range).
+    fn expand<L: Lane>(params: Params<'_, L>, ctx: &Context<L>, out: &mut Expansion<L>);
+}
+
+/// A material type as the registry sees it: object-safe, scalar.
+pub trait MaterialType: Send + Sync {
+    fn name(&self) -> &str;
+    fn summary(&self) -> &str;
+    fn params(&self) -> &[ParamSpec];
+    fn lobes(&self) -> &[&'static str];
+    fn verify_cases(&self) -> &[VerifyCase];
+    fn expand(&self, params: &[f32], ctx: &Context<f32>) -> Expansion<f32>;
+}
+
+/// The [`MaterialType`] of a built-in [`MaterialModel`].
+pub struct BuiltinMaterial<M>(PhantomData<M>);
+
+impl<M> BuiltinMaterial<M> {
+    pub const fn new() -> Self {
+        BuiltinMaterial(PhantomData)
+    }
+}
+
+impl<M: MaterialModel> Default for BuiltinMaterial<M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<M: MaterialModel> MaterialType for BuiltinMaterial<M> {
+    fn name(&self) -> &str {
+        M::NAME
+    }
+    fn summary(&self) -> &str {
+        M::SUMMARY
+    }
+    fn params(&self) -> &[ParamSpec] {
+        M::PARAMS
+    }
+    fn lobes(&self) -> &[&'static str] {
+        M::LOBES
+    }
+    fn verify_cases(&self) -> &[VerifyCase] {
+        M::VERIFY_CASES
+    }
+    fn expand(&self, params: &[f32], ctx: &Context<f32>) -> Expansion<f32> {
+        let mut out = Expansion::default();
+        M::expand(Params::new(params), ctx, &mut out);
+        out
+    }
+}
+
+/// Every built-in material type, in registration (id) order.
+pub static BUILTIN_MATERIALS: &[&(dyn MaterialType + 'static)] =
+    &[&BuiltinMaterial::<disney::Disney>::new()];
