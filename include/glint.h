@@ -222,6 +222,130 @@ typedef struct glint_albedo_batch_args {
 } glint_albedo_batch_args;
 
 /*
+ Per-lane values of one parameter of a material batch: parameter `param` (its index
+ in the material type's schema) of type `param_type` (`GLINT_PARAM_*`), read from
+ `value[0]` (FLOAT, ENUM) or `value[0..3]` (RGB: r, g, b), `count` floats each.
+ */
+typedef struct glint_override_lanes {
+  uint32_t param;
+  uint32_t param_type;
+  const float *value[3];
+} glint_override_lanes;
+
+/*
+ The lanes of a material batch: one compiled material, and per lane a shading
+ context (`wo` and the shading frame) and the textured parameters.
+ */
+typedef struct glint_material_lanes {
+  const struct glint_material *material;
+  size_t count;
+  /*
+   Optional: `count` bytes, 0 = skip the lane.
+   */
+  const uint8_t *active;
+  const float *wo_x;
+  const float *wo_y;
+  const float *wo_z;
+  const float *normal_x;
+  const float *normal_y;
+  const float *normal_z;
+  /*
+   Optional (all three NULL): tangents chosen automatically, as a zero tangent is.
+   */
+  const float *tangent_x;
+  const float *tangent_y;
+  const float *tangent_z;
+  /*
+   `override_count` entries, or NULL with `override_count == 0`.
+   */
+  const struct glint_override_lanes *overrides;
+  size_t override_count;
+} glint_material_lanes;
+
+/*
+ Arguments of `glint_material_eval_batch`.
+ */
+typedef struct glint_material_eval_batch_args {
+  /*
+   Set by the caller to `sizeof(glint_material_eval_batch_args)`.
+   */
+  uint32_t struct_size;
+  struct glint_material_lanes lanes;
+  const float *wi_x;
+  const float *wi_y;
+  const float *wi_z;
+  float *value_r;
+  float *value_g;
+  float *value_b;
+  float *pdf;
+  /*
+   Optional.
+   */
+  float *pdf_reverse;
+} glint_material_eval_batch_args;
+
+/*
+ Arguments of `glint_material_pdf_batch`.
+ */
+typedef struct glint_material_pdf_batch_args {
+  /*
+   Set by the caller to `sizeof(glint_material_pdf_batch_args)`.
+   */
+  uint32_t struct_size;
+  struct glint_material_lanes lanes;
+  const float *wi_x;
+  const float *wi_y;
+  const float *wi_z;
+  float *pdf;
+} glint_material_pdf_batch_args;
+
+/*
+ Arguments of `glint_material_sample_batch` (outputs as `glint_sample_batch_args`;
+ `lobe` receives the material's slot, see `glint_material_info.lobe_count`).
+ */
+typedef struct glint_material_sample_batch_args {
+  /*
+   Set by the caller to `sizeof(glint_material_sample_batch_args)`.
+   */
+  uint32_t struct_size;
+  struct glint_material_lanes lanes;
+  const float *u_lobe;
+  const float *u0;
+  const float *u1;
+  float *wi_x;
+  float *wi_y;
+  float *wi_z;
+  float *pdf;
+  float *weight_r;
+  float *weight_g;
+  float *weight_b;
+  /*
+   Optional outputs (NULL = not written).
+   */
+  float *value_r;
+  float *value_g;
+  float *value_b;
+  uint32_t *flags;
+  uint32_t *lobe;
+  float *eta;
+  float *roughness;
+} glint_material_sample_batch_args;
+
+/*
+ Arguments of `glint_material_albedo_batch`.
+ */
+typedef struct glint_material_albedo_batch_args {
+  /*
+   Set by the caller to `sizeof(glint_material_albedo_batch_args)`.
+   */
+  uint32_t struct_size;
+  struct glint_material_lanes lanes;
+  float *albedo_r;
+  float *albedo_g;
+  float *albedo_b;
+} glint_material_albedo_batch_args;
+
+/*
  A 3-vector (world-space direction or normal).
  */
 typedef struct glint_vec3 {
@@ -528,6 +652,45 @@ glint_status glint_sample_batch(const struct glint_sample_batch_args *args);
  `args` is NULL or valid; its pointers as documented on `glint_albedo_batch_args`.
  */
 glint_status glint_albedo_batch(const struct glint_albedo_batch_args *args);
+
+/*
+ `glint_eval` of the closure `glint_material_closure` would build for each lane,
+ over SoA arrays, without building closures: the material expands per lane, each
+ slot's lobe runs its SIMD kernels over the lanes, pruning and lobe selection as in
+ the closure. Errors as `glint_eval_batch` (invalid lanes, including overrides out of
+ their range, are zeroed and the first is reported as `lane i: ...`).
+
+ # Safety
+ `args` is NULL or valid; its pointers as documented on the argument structs.
+ */
+glint_status glint_material_eval_batch(const struct glint_material_eval_batch_args *args);
+
+/*
+ `glint_pdf` of each lane's material closure over SoA arrays (see
+ `glint_material_eval_batch`).
+
+ # Safety
+ `args` is NULL or valid; its pointers as documented on the argument structs.
+ */
+glint_status glint_material_pdf_batch(const struct glint_material_pdf_batch_args *args);
+
+/*
+ `glint_sample` of each lane's material closure over SoA arrays (see
+ `glint_material_eval_batch`); `lobe` receives the sampled slot.
+
+ # Safety
+ `args` is NULL or valid; its pointers as documented on the argument structs.
+ */
+glint_status glint_material_sample_batch(const struct glint_material_sample_batch_args *args);
+
+/*
+ Directional albedo of each lane's material closure over SoA arrays (see
+ `glint_material_eval_batch`): for lobe selection and a scanline host's ambient term.
+
+ # Safety
+ `args` is NULL or valid; its pointers as documented on the argument structs.
+ */
+glint_status glint_material_albedo_batch(const struct glint_material_albedo_batch_args *args);
 
 /*
  Create an arena with room for `capacity` closures.

@@ -13,6 +13,7 @@
 //! unfinished closures) get zeroed outputs, the other lanes are still computed, and
 //! the call reports the first bad lane.
 
+pub mod material;
 mod stage;
 
 use crate::closure::{Closure, MAX_LOBES, SampleResult};

@@ -452,6 +452,9 @@ pub(super) struct Scratch {
     pub lobe_index: Vec<u32>,
     /// The lobe each lane of an in-place mixture sample chose, as a float index.
     pub chosen: Vec<f32>,
+    /// A material batch's chunk: its active lanes and its slots' rows.
+    pub chunk: Vec<u32>,
+    pub material: super::material::SlotRows,
 }
 
 impl Scratch {

@@ -328,23 +328,8 @@ impl Closure {
                 "the closure is already finished",
             ));
         }
-        let n = self.lobe_count();
-        let mut shares: [f32; MAX_LOBES] =
-            std::array::from_fn(|k| shares.get(k).map_or(0.0, |s| s.max(0.0)));
-        if n == 1 {
-            shares[0] = 1.0;
-        }
-        // Without any reflecting lobe at this wo, fall back to the weights, then to
-        // uniform.
-        if shares[..n].iter().sum::<f32>() <= 0.0 {
-            for (k, l) in self.lobes().iter().enumerate() {
-                shares[k] = l.weight.luminance().max(0.0);
-            }
-        }
-        if shares[..n].iter().sum::<f32>() <= 0.0 {
-            shares[..n].fill(1.0);
-        }
-        for (lobe, p) in self.lobes.iter_mut().zip(normalize_shares(&shares[..n])) {
+        let probabilities = selection(shares, |k| self.lobes[k].weight.luminance());
+        for (lobe, p) in self.lobes.iter_mut().zip(probabilities) {
             lobe.probability = p;
         }
         self.shape_id = self.hash_shape();
@@ -683,6 +668,30 @@ fn same_lobe_type(a: &LobeInstance, b: &LobeInstance) -> bool {
 
 /// Selection probabilities proportional to `shares` (finite, >= 0, not all 0). The
 /// shares are divided by the largest first, so their sum cannot overflow.
+/// Selection probabilities of lobes whose `luminance(weight * albedo(wo))` are `shares`
+/// (one per lobe): proportional to them; a single lobe is chosen with probability 1;
+/// without any reflecting lobe, proportional to `weight_luminance(k)`, then uniform.
+pub(crate) fn selection(
+    shares: &[f32],
+    weight_luminance: impl Fn(usize) -> f32,
+) -> [f32; MAX_LOBES] {
+    let n = shares.len();
+    let mut s: [f32; MAX_LOBES] =
+        std::array::from_fn(|k| shares.get(k).map_or(0.0, |s| s.max(0.0)));
+    if n == 1 {
+        s[0] = 1.0;
+    }
+    if s[..n].iter().sum::<f32>() <= 0.0 {
+        for (k, s) in s[..n].iter_mut().enumerate() {
+            *s = weight_luminance(k).max(0.0);
+        }
+    }
+    if s[..n].iter().sum::<f32>() <= 0.0 {
+        s[..n].fill(1.0);
+    }
+    normalize_shares(&s[..n])
+}
+
 fn normalize_shares(shares: &[f32]) -> [f32; MAX_LOBES] {
     let largest = shares.iter().fold(0.0f32, |m, &s| m.max(s));
     let mut p = [0.0f32; MAX_LOBES];

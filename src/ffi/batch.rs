@@ -468,3 +468,301 @@ pub unsafe extern "C" fn glint_albedo_batch(args: *const glint_albedo_batch_args
         }
     })
 }
+
+/// Per-lane values of one parameter of a material batch: parameter `param` (its index
+/// in the material type's schema) of type `param_type` (`GLINT_PARAM_*`), read from
+/// `value[0]` (FLOAT, ENUM) or `value[0..3]` (RGB: r, g, b), `count` floats each.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_override_lanes {
+    pub param: u32,
+    pub param_type: u32,
+    pub value: [*const f32; 3],
+}
+
+/// The lanes of a material batch: one compiled material, and per lane a shading
+/// context (`wo` and the shading frame) and the textured parameters.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_material_lanes {
+    pub material: *const glint_material,
+    pub count: usize,
+    /// Optional: `count` bytes, 0 = skip the lane.
+    pub active: *const u8,
+    pub wo_x: *const f32,
+    pub wo_y: *const f32,
+    pub wo_z: *const f32,
+    pub normal_x: *const f32,
+    pub normal_y: *const f32,
+    pub normal_z: *const f32,
+    /// Optional (all three NULL): tangents chosen automatically, as a zero tangent is.
+    pub tangent_x: *const f32,
+    pub tangent_y: *const f32,
+    pub tangent_z: *const f32,
+    /// `override_count` entries, or NULL with `override_count == 0`.
+    pub overrides: *const glint_override_lanes,
+    pub override_count: usize,
+}
+
+/// Arguments of `glint_material_eval_batch`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_material_eval_batch_args {
+    /// Set by the caller to `sizeof(glint_material_eval_batch_args)`.
+    pub struct_size: u32,
+    pub lanes: glint_material_lanes,
+    pub wi_x: *const f32,
+    pub wi_y: *const f32,
+    pub wi_z: *const f32,
+    pub value_r: *mut f32,
+    pub value_g: *mut f32,
+    pub value_b: *mut f32,
+    pub pdf: *mut f32,
+    /// Optional.
+    pub pdf_reverse: *mut f32,
+}
+
+/// Arguments of `glint_material_pdf_batch`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_material_pdf_batch_args {
+    /// Set by the caller to `sizeof(glint_material_pdf_batch_args)`.
+    pub struct_size: u32,
+    pub lanes: glint_material_lanes,
+    pub wi_x: *const f32,
+    pub wi_y: *const f32,
+    pub wi_z: *const f32,
+    pub pdf: *mut f32,
+}
+
+/// Arguments of `glint_material_sample_batch` (outputs as `glint_sample_batch_args`;
+/// `lobe` receives the material's slot, see `glint_material_info.lobe_count`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_material_sample_batch_args {
+    /// Set by the caller to `sizeof(glint_material_sample_batch_args)`.
+    pub struct_size: u32,
+    pub lanes: glint_material_lanes,
+    pub u_lobe: *const f32,
+    pub u0: *const f32,
+    pub u1: *const f32,
+    pub wi_x: *mut f32,
+    pub wi_y: *mut f32,
+    pub wi_z: *mut f32,
+    pub pdf: *mut f32,
+    pub weight_r: *mut f32,
+    pub weight_g: *mut f32,
+    pub weight_b: *mut f32,
+    /// Optional outputs (NULL = not written).
+    pub value_r: *mut f32,
+    pub value_g: *mut f32,
+    pub value_b: *mut f32,
+    pub flags: *mut u32,
+    pub lobe: *mut u32,
+    pub eta: *mut f32,
+    pub roughness: *mut f32,
+}
+
+/// Arguments of `glint_material_albedo_batch`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct glint_material_albedo_batch_args {
+    /// Set by the caller to `sizeof(glint_material_albedo_batch_args)`.
+    pub struct_size: u32,
+    pub lanes: glint_material_lanes,
+    pub albedo_r: *mut f32,
+    pub albedo_g: *mut f32,
+    pub albedo_b: *mut f32,
+}
+
+macro_rules! sized {
+    ($($t:ty),*) => {$(
+        impl Sized32 for $t {
+            fn struct_size(&self) -> u32 {
+                self.struct_size
+            }
+        }
+    )*};
+}
+sized!(
+    glint_material_eval_batch_args,
+    glint_material_pdf_batch_args,
+    glint_material_sample_batch_args,
+    glint_material_albedo_batch_args
+);
+
+/// The checked lanes of a material batch, with its runtime's kernels and threads.
+///
+/// # Safety
+/// Pointers as documented on `glint_material_lanes`.
+unsafe fn material_lanes<'a>(
+    l: &glint_material_lanes,
+    overrides: &'a mut Vec<batch::material::OverrideLanes<'a>>,
+) -> Result<(batch::material::MaterialInput<'a>, Exec<'a>), Error> {
+    let n = l.count;
+    batch::check_count(n)?;
+    // SAFETY: per the contract; `n` is small enough for a slice of any element.
+    unsafe {
+        let (material, runtime) = super::material::material_ref(l.material)?;
+        let active = (!l.active.is_null()).then(|| std::slice::from_raw_parts(l.active, n));
+        let wo = soa_in(l.wo_x, l.wo_y, l.wo_z, n, "wo")?;
+        let normal = soa_in(l.normal_x, l.normal_y, l.normal_z, n, "normal")?;
+        let tangent = if l.tangent_x.is_null() && l.tangent_y.is_null() && l.tangent_z.is_null() {
+            None
+        } else {
+            Some(soa_in(l.tangent_x, l.tangent_y, l.tangent_z, n, "tangent")?)
+        };
+        if l.override_count > 0 {
+            let given = input(l.overrides, l.override_count, "overrides")?;
+            for (i, o) in given.iter().enumerate() {
+                let kind = super::material::param_kind(o.param_type, &format!("overrides[{i}]"))?;
+                let mut value: [&[f32]; 3] = [&[]; 3];
+                for (c, v) in value.iter_mut().enumerate().take(kind.size()) {
+                    *v = input(o.value[c], n, format_args!("overrides[{i}].value[{c}]"))?;
+                }
+                overrides.push(batch::material::OverrideLanes {
+                    param: o.param,
+                    kind,
+                    value,
+                });
+            }
+        }
+        let exec = runtime.live()?.runtime.exec();
+        Ok((
+            batch::material::MaterialInput {
+                count: n,
+                material,
+                active,
+                wo,
+                normal,
+                tangent,
+                overrides,
+            },
+            exec,
+        ))
+    }
+}
+
+/// `glint_eval` of the closure `glint_material_closure` would build for each lane,
+/// over SoA arrays, without building closures: the material expands per lane, each
+/// slot's lobe runs its SIMD kernels over the lanes, pruning and lobe selection as in
+/// the closure. Errors as `glint_eval_batch` (invalid lanes, including overrides out of
+/// their range, are zeroed and the first is reported as `lane i: ...`).
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on the argument structs.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_material_eval_batch(
+    args: *const glint_material_eval_batch_args,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.lanes.count;
+        let mut overrides = Vec::new();
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let (input, exec) = material_lanes(&a.lanes, &mut overrides)?;
+            let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
+            let out = EvalOutput {
+                value: soa_out(a.value_r, a.value_g, a.value_b, n, "value")?,
+                pdf: output(a.pdf, n, "pdf")?,
+                pdf_reverse: optional(a.pdf_reverse, n),
+            };
+            batch::material::eval(&exec, &input, wi, out)
+        }
+    })
+}
+
+/// `glint_pdf` of each lane's material closure over SoA arrays (see
+/// `glint_material_eval_batch`).
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on the argument structs.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_material_pdf_batch(
+    args: *const glint_material_pdf_batch_args,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.lanes.count;
+        let mut overrides = Vec::new();
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let (input, exec) = material_lanes(&a.lanes, &mut overrides)?;
+            let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
+            let pdf = output(a.pdf, n, "pdf")?;
+            batch::material::pdf(&exec, &input, wi, pdf)
+        }
+    })
+}
+
+/// `glint_sample` of each lane's material closure over SoA arrays (see
+/// `glint_material_eval_batch`); `lobe` receives the sampled slot.
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on the argument structs.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_material_sample_batch(
+    args: *const glint_material_sample_batch_args,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.lanes.count;
+        let mut overrides = Vec::new();
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let (input, exec) = material_lanes(&a.lanes, &mut overrides)?;
+            let u = SampleRandoms {
+                u_lobe: self::input(a.u_lobe, n, "u_lobe")?,
+                u0: self::input(a.u0, n, "u0")?,
+                u1: self::input(a.u1, n, "u1")?,
+            };
+            let value = if a.value_r.is_null() && a.value_g.is_null() && a.value_b.is_null() {
+                None
+            } else {
+                Some(soa_out(a.value_r, a.value_g, a.value_b, n, "value")?)
+            };
+            let out = SampleOutput {
+                wi: soa_out(a.wi_x, a.wi_y, a.wi_z, n, "wi")?,
+                pdf: output(a.pdf, n, "pdf")?,
+                weight: soa_out(a.weight_r, a.weight_g, a.weight_b, n, "weight")?,
+                value,
+                flags: optional(a.flags, n),
+                lobe: optional(a.lobe, n),
+                eta: optional(a.eta, n),
+                roughness: optional(a.roughness, n),
+            };
+            batch::material::sample(&exec, &input, u, out)
+        }
+    })
+}
+
+/// Directional albedo of each lane's material closure over SoA arrays (see
+/// `glint_material_eval_batch`): for lobe selection and a scanline host's ambient term.
+///
+/// # Safety
+/// `args` is NULL or valid; its pointers as documented on the argument structs.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn glint_material_albedo_batch(
+    args: *const glint_material_albedo_batch_args,
+) -> glint_status {
+    guard(|| {
+        // SAFETY: per the contract.
+        let a = unsafe { deref(args, "args") }?;
+        check_size(a, "args")?;
+        let n = a.lanes.count;
+        let mut overrides = Vec::new();
+        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        unsafe {
+            let (input, exec) = material_lanes(&a.lanes, &mut overrides)?;
+            let out = soa_out(a.albedo_r, a.albedo_g, a.albedo_b, n, "albedo")?;
+            batch::material::albedo(&exec, &input, out)
+        }
+    })
+}

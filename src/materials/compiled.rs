@@ -7,7 +7,7 @@ use crate::closure::{Closure, MAX_LOBES};
 use crate::error::{Error, Status};
 use crate::lobes::Transport;
 use crate::math::Rgb;
-use crate::params::{self, ParamKind};
+use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::{LobeRef, Registry};
 
 /// Most parameter values a material type's block may hold.
@@ -119,40 +119,61 @@ impl Material {
         out.copy_from_slice(&self.params);
         let specs = self.kind.params();
         for (i, o) in overrides.iter().enumerate() {
-            let spec = specs.get(o.param as usize).ok_or_else(|| {
-                Error::new(
-                    Status::OutOfRange,
-                    format!(
-                        "override {i}: parameter index {} does not exist ({} has {} parameters)",
-                        o.param,
-                        self.kind.name(),
-                        specs.len()
-                    ),
-                )
-            })?;
-            if spec.kind != o.kind {
-                return Err(Error::new(
-                    Status::InvalidArgument,
-                    format!(
-                        "override {i}: {}.{} is {}, not {}",
-                        self.kind.name(),
-                        spec.name,
-                        kind_name(spec.kind),
-                        kind_name(o.kind)
-                    ),
-                ));
-            }
+            let spec = self.override_spec(i, o.param, o.kind)?;
             let n = spec.kind.size();
             let at = params::offset_of(specs, o.param as usize);
             let value = &o.value[..n];
-            params::validate(
-                &format!("override {i}: {}", self.kind.name()),
-                std::slice::from_ref(spec),
-                value,
-            )?;
+            self.check_override_value(i, spec, value)?;
             out[at..at + n].copy_from_slice(value);
         }
         Ok(())
+    }
+
+    /// The values of override `i` for `spec` are in its range (the error names the
+    /// override).
+    pub fn check_override_value(
+        &self,
+        i: usize,
+        spec: &ParamSpec,
+        value: &[f32],
+    ) -> Result<(), Error> {
+        params::validate(self.kind.name(), std::slice::from_ref(spec), value)
+            .map_err(|e| Error::new(e.status, format!("overrides[{i}]: {}", e.message)))
+    }
+
+    /// The schema entry override `i`, of parameter `param` as a `kind`, sets (errors:
+    /// unknown index, wrong kind).
+    pub fn override_spec(
+        &self,
+        i: usize,
+        param: u32,
+        kind: ParamKind,
+    ) -> Result<&ParamSpec, Error> {
+        let what = format_args!("overrides[{i}]");
+        let specs = self.kind.params();
+        let spec = specs.get(param as usize).ok_or_else(|| {
+            Error::new(
+                Status::OutOfRange,
+                format!(
+                    "{what}: parameter index {param} does not exist ({} has {} parameters)",
+                    self.kind.name(),
+                    specs.len()
+                ),
+            )
+        })?;
+        if spec.kind != kind {
+            return Err(Error::new(
+                Status::InvalidArgument,
+                format!(
+                    "{what}: {}.{} is {}, not {}",
+                    self.kind.name(),
+                    spec.name,
+                    kind_name(spec.kind),
+                    kind_name(kind)
+                ),
+            ));
+        }
+        Ok(spec)
     }
 
     /// Build (and finish) the closure of one shading point into `closure`, which is
