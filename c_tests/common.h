@@ -150,6 +150,17 @@ void fill_floats(float *a, size_t n, float v);
         assert_still_works(fx);                                                          \
     } while (0)
 
+/* Batch against scalar: |a - b| <= tol * max(|a|, |b|, 1e-2). */
+#define assert_batch_close(a, b, tol)                                                    \
+    do {                                                                                 \
+        float ba_ = (float)(a), bb_ = (float)(b);                                        \
+        float bt_ = (tol) * fmaxf(fmaxf(fabsf(ba_), fabsf(bb_)), 1e-2f);                 \
+        if (!(fabsf(ba_ - bb_) <= bt_))                                                  \
+            print_error("%s = %.9g, %s = %.9g (tolerance %g)\n", #a, (double)ba_, #b,    \
+                        (double)bb_, (double)bt_);                                       \
+        assert_true(fabsf(ba_ - bb_) <= bt_);                                            \
+    } while (0)
+
 /* glint_last_error() contains `needle`. */
 #define assert_error_mentions(needle)                                                    \
     do {                                                                                 \

@@ -15,16 +15,6 @@
 #define SAMPLE_TOL 2e-3f
 #define SENTINEL (-7.0f)
 
-#define assert_batch_close(a, b, tol)                                                    \
-    do {                                                                                 \
-        float ba_ = (float)(a), bb_ = (float)(b);                                        \
-        float bt_ = (tol) * fmaxf(fmaxf(fabsf(ba_), fabsf(bb_)), 1e-2f);                 \
-        if (!(fabsf(ba_ - bb_) <= bt_))                                                  \
-            print_error("%s = %.9g, %s = %.9g (tolerance %g)\n", #a, (double)ba_, #b,    \
-                        (double)bb_, (double)bt_);                                       \
-        assert_true(fabsf(ba_ - bb_) <= bt_);                                            \
-    } while (0)
-
 static const float WHITE[3] = {1.0f, 1.0f, 1.0f};
 
 static void load(const fixture *fx, const char *path)
