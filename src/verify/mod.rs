@@ -31,6 +31,7 @@
 
 mod checks;
 pub mod chi2;
+pub mod material;
 mod report;
 
 pub use report::{CaseReport, Chi2Row, HardReport, LobeReport, Moment, Report, WindowRow};
@@ -331,13 +332,20 @@ pub fn verify_lobe(lobe: &LobeRef, tier: Tier) -> LobeReport {
     }
 }
 
-/// Verify every lobe type of `registry`.
+/// Verify every lobe type of `registry`, then every material type (as a lobe:
+/// [`material::MaterialLobe`]).
 pub fn verify_registry(registry: &Registry, tier: Tier) -> Report {
-    Report::new(
-        tier,
-        registry
-            .iter()
-            .map(|lobe| verify_lobe(lobe, tier))
-            .collect(),
-    )
+    let mut reports: Vec<LobeReport> = registry
+        .iter()
+        .map(|lobe| verify_lobe(lobe, tier))
+        .collect();
+    reports.extend((0..registry.materials().len() as u32).map(|id| verify_material(id, tier)));
+    Report::new(tier, reports)
+}
+
+/// Verify built-in material type `type_id` through [`material::MaterialLobe`].
+pub fn verify_material(type_id: u32, tier: Tier) -> LobeReport {
+    let lobe = material::MaterialLobe::new(type_id)
+        .unwrap_or_else(|e| panic!("material type {type_id}: {}", e.message));
+    verify_lobe(&LobeRef::Shared(std::sync::Arc::new(lobe)), tier)
 }
