@@ -6,9 +6,15 @@ use crate::math::{Lane, Rgb};
 /// Generalized Schlick: `F0 + (F90 - F0) (1 - cos)^5` (Schlick 1994; seed 000's `FrnlBlend`).
 #[inline(always)]
 pub fn schlick<L: Lane>(f0: L, f90: L, cos_theta: L) -> L {
+    (f90 - f0).mul_add(schlick_weight(cos_theta), f0)
+}
+
+/// Schlick's weight `clamp(1 - cos, 0, 1)^5` (Burley 2012's `SchlickWeight`).
+#[inline(always)]
+pub fn schlick_weight<L: Lane>(cos_theta: L) -> L {
     let m = (L::one() - cos_theta).clamp(L::zero(), L::one());
     let m2 = m * m;
-    (f90 - f0).mul_add(m2 * m2 * m, f0)
+    m2 * m2 * m
 }
 
 /// Exact unpolarized Fresnel reflectance of a dielectric interface with relative

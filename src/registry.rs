@@ -9,6 +9,8 @@
 use crate::error::{Error, Status};
 use crate::lobes::conductor::Conductor;
 use crate::lobes::dielectric::Dielectric;
+use crate::lobes::disney_diffuse::DisneyDiffuse;
+use crate::lobes::disney_sheen::DisneySheen;
 use crate::lobes::lambert::Lambert;
 use crate::lobes::mirror::Mirror;
 use crate::lobes::{Builtin, LobeType};
@@ -22,6 +24,8 @@ pub static BUILTINS: &[&(dyn LobeType + 'static)] = &[
     &Builtin::<Conductor>::new(),
     &Builtin::<Dielectric>::new(),
     &Builtin::<Mirror>::new(),
+    &Builtin::<DisneyDiffuse>::new(),
+    &Builtin::<DisneySheen>::new(),
 ];
 
 /// A lobe type as registries and closures hold it.

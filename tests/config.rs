@@ -35,7 +35,14 @@ fn defaults_and_valid_values() {
     assert_eq!(rt.kernels(), Kernels::scalar());
     assert_eq!(
         rt.registry.names(),
-        ["lambert", "conductor", "dielectric", "mirror"]
+        [
+            "lambert",
+            "conductor",
+            "dielectric",
+            "mirror",
+            "disney_diffuse",
+            "disney_sheen"
+        ]
     );
 }
 

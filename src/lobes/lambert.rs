@@ -76,11 +76,7 @@ impl Model for Lambert {
         _mode: Transport,
         settle: &mut impl Settle<L>,
     ) -> Sample<L> {
-        // Malley's method: uniform disk point lifted to the hemisphere.
-        let r = u0.sqrt();
-        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
-        let z = (L::one() - u0).safe_sqrt();
-        let wi = settle.settle(Vec3::new(r * cos_phi, r * sin_phi, z));
+        let wi = settle.settle(cosine_hemisphere(u0, u1));
         let valid = both_above(wo, wi);
         let pdf = L::select(valid, wi.z, L::zero()) * L::splat(INV_PI);
         Sample {
@@ -99,4 +95,14 @@ impl Model for Lambert {
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
         Rgb::select(wo.z.gt(L::zero()), p.color, Rgb::zero())
     }
+}
+
+/// A cosine-distributed direction (density `cos theta / pi`) by Malley's method: a
+/// uniform disk point lifted to the hemisphere. Shared by the diffuse-like lobes.
+#[inline(always)]
+pub(crate) fn cosine_hemisphere<L: Lane>(u0: L, u1: L) -> Vec3<L> {
+    let r = u0.sqrt();
+    let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
+    let z = (L::one() - u0).safe_sqrt();
+    Vec3::new(r * cos_phi, r * sin_phi, z)
 }

@@ -13,6 +13,8 @@
 
 pub mod conductor;
 pub mod dielectric;
+pub mod disney_diffuse;
+pub mod disney_sheen;
 pub mod fresnel_params;
 pub mod lambert;
 pub mod mirror;

@@ -483,6 +483,40 @@ pub fn refract(w: V, n: V, eta: f64) -> Option<(V, f64)> {
 // ---------------------------------------------------------------------------------
 // Quadrature
 
+/// Gauss-Legendre nodes and weights of order `n` on `[lo, hi]` (Newton on the
+/// three-term recurrence of the Legendre polynomials).
+pub fn gauss_legendre(n: usize, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+    (1..=n)
+        .map(|i| {
+            let mut x = (PI * (i as f64 - 0.25) / (n as f64 + 0.5)).cos();
+            let mut dp = 1.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    let kf = k as f64;
+                    (p0, p1) = (p1, ((2.0 * kf - 1.0) * x * p1 - (kf - 1.0) * p0) / kf);
+                }
+                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let dx = p1 / dp;
+                x -= dx;
+                if dx.abs() < 1e-15 {
+                    break;
+                }
+            }
+            let w = 2.0 / ((1.0 - x * x) * dp * dp);
+            (lo + (hi - lo) * (x + 1.0) / 2.0, w * (hi - lo) / 2.0)
+        })
+        .collect()
+}
+
+/// Gauss-Legendre nodes of order `n` on each piece of `[breaks[0], breaks.last()]`.
+pub fn gauss_legendre_pieces(n: usize, breaks: &[f64]) -> Vec<(f64, f64)> {
+    breaks
+        .windows(2)
+        .flat_map(|w| gauss_legendre(n, w[0], w[1]))
+        .collect()
+}
+
 /// `int f(m) d omega_m` over the upper hemisphere by the midpoint rule in
 /// `(w, phi)` with `tan theta = alpha w / (1 - w)`: nodes concentrate where an NDF of
 /// roughness `alpha` has its mass, and the map covers theta in [0, pi/2).
