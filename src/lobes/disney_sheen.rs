@@ -88,6 +88,14 @@ impl Model for DisneySheen {
         1e-4
     }
 
+    /// `color S(cos_o)` is largest at grazing (`S(0) = 0.0885`): far below 1, and the
+    /// bound a material scaling the lobe by `sheen Csheen` (up to 10) sums.
+    fn energy_bound(params: &[f32]) -> f32 {
+        let p = Self::prepare(Params::new(params));
+        let a = Self::albedo(&p, Vec3::new(1.0, 0.0, 1e-6), Transport::Radiance);
+        a.r.max(a.g).max(a.b) * 1.001
+    }
+
     #[inline(always)]
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
         Prepared {

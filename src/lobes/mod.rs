@@ -258,6 +258,13 @@ pub trait Model: Send + Sync + 'static {
     const VERIFY_CASES: &'static [VerifyCase] = &[];
     /// Documented relative accuracy of `albedo` with these parameters (the harness checks it).
     fn albedo_tolerance(params: &[f32]) -> f32;
+    /// The largest directional albedo the model has with these parameters: 1 for an
+    /// energy-conserving lobe (the default). A model that is not energy conserving by
+    /// design (Burley 2012's diffuse) states its own bound, and the harness's energy
+    /// check holds its sampled albedo to that instead of 1.
+    fn energy_bound(_params: &[f32]) -> f32 {
+        1.0
+    }
 
     /// Length of the decoded block [`Model::decode`] writes.
     const DECODED_LEN: usize = crate::params::block_size(Self::PARAMS);
@@ -389,6 +396,10 @@ pub trait LobeType: Send + Sync {
     }
     /// Documented relative accuracy of `albedo` with these parameters.
     fn albedo_tolerance(&self, params: &[f32]) -> f32;
+    /// The largest directional albedo with these parameters ([`Model::energy_bound`]).
+    fn energy_bound(&self, _params: &[f32]) -> f32 {
+        1.0
+    }
     /// Outputs zeroed because they were NaN, infinite or negative (plugin lobes; the
     /// built-in lobes never produce them).
     fn sanitized_count(&self) -> u64 {
@@ -527,6 +538,9 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn albedo_tolerance(&self, params: &[f32]) -> f32 {
         M::albedo_tolerance(params)
+    }
+    fn energy_bound(&self, params: &[f32]) -> f32 {
+        M::energy_bound(params)
     }
     fn has_kernels(&self) -> bool {
         true

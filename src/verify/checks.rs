@@ -438,7 +438,7 @@ fn mean_se(n: usize, mut f: impl FnMut() -> [f64; 3]) -> ([f64; 3], [f64; 3]) {
     (mean, se)
 }
 
-/// Directional albedo at `wo`: `<= 1` in importance transport, importance sampling
+/// Directional albedo at `wo`: `<= 1` (or the lobe's `energy_bound`) in importance transport, importance sampling
 /// against uniform sampling, and the lobe's `albedo` against the estimate.
 fn energy(
     lobe: &dyn LobeType,
@@ -469,10 +469,11 @@ fn energy(
         }
         w
     });
+    let bound = f64::from(lobe.energy_bound(p));
     for c in 0..3 {
         report.albedo_min = report.albedo_min.min(mean[c]);
         report.albedo_max = report.albedo_max.max(mean[c]);
-        if mean[c] > 1.0 + 3.0 * se[c] + 1e-6 {
+        if mean[c] > bound + 3.0 * se[c] + 1e-6 {
             report.energy_violations += 1;
         }
     }

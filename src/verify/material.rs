@@ -105,6 +105,28 @@ impl LobeType for MaterialLobe {
     fn verify_cases(&self) -> &[VerifyCase] {
         self.kind.verify_cases()
     }
+    /// The sum over slots of the largest weight channel times the slot lobe's bound.
+    fn energy_bound(&self, params: &[f32]) -> f32 {
+        let Ok(material) = Material::new(&self.registry, self.type_id, Some(params), 0.0) else {
+            return 1.0;
+        };
+        let e = self.kind.expand(
+            params,
+            &ShadingContext::new(Vec3::new(0.0, 0.0, 1.0), Frame::IDENTITY).lanes(),
+        );
+        let sum: f32 = material
+            .slots()
+            .iter()
+            .enumerate()
+            .map(|(k, (_, lobe))| {
+                let w = e.weight[k];
+                w.r.max(w.g).max(w.b)
+                    * lobe.energy_bound(&e.params[k][..params::block_size(lobe.params())])
+            })
+            .sum();
+        sum.max(1.0)
+    }
+
     /// The largest documented tolerance of the lobes the material emits with these
     /// parameters (at normal incidence).
     fn albedo_tolerance(&self, params: &[f32]) -> f32 {
