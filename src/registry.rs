@@ -9,8 +9,10 @@
 use crate::error::{Error, Status};
 use crate::lobes::conductor::Conductor;
 use crate::lobes::dielectric::Dielectric;
+use crate::lobes::disney_clearcoat::DisneyClearcoat;
 use crate::lobes::disney_diffuse::DisneyDiffuse;
 use crate::lobes::disney_sheen::DisneySheen;
+use crate::lobes::disney_specular::DisneySpecular;
 use crate::lobes::lambert::Lambert;
 use crate::lobes::mirror::Mirror;
 use crate::lobes::{Builtin, LobeType};
@@ -26,6 +28,8 @@ pub static BUILTINS: &[&(dyn LobeType + 'static)] = &[
     &Builtin::<Mirror>::new(),
     &Builtin::<DisneyDiffuse>::new(),
     &Builtin::<DisneySheen>::new(),
+    &Builtin::<DisneySpecular>::new(),
+    &Builtin::<DisneyClearcoat>::new(),
 ];
 
 /// A lobe type as registries and closures hold it.

@@ -3,6 +3,7 @@
 //! pruning against the full closure, and its albedo against quadrature.
 
 mod common;
+mod reference;
 
 use common::Rng;
 use glint::materials::{DEFAULT_PRUNE, Material, Override, ShadingContext};
@@ -90,9 +91,15 @@ impl Disney {
 
     /// `f(l, v)` (without the cosine), local frame, both above the surface.
     fn brdf(&self, l: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+        let [a, b, c] = self.brdf_terms(l, v);
+        [0, 1, 2].map(|k| a[k] + b[k] + c[k])
+    }
+
+    /// The three terms of `f`: diffuse and sheen, specular, clearcoat.
+    fn brdf_terms(&self, l: [f64; 3], v: [f64; 3]) -> [[f64; 3]; 3] {
         let (nl, nv) = (l[2], v[2]);
         if nl <= 0.0 || nv <= 0.0 {
-            return [0.0; 3];
+            return [[0.0; 3]; 3];
         }
         let mix = |a: f64, b: f64, t: f64| a + (b - a) * t;
         let sq = |x: f64| x * x;
@@ -135,7 +142,7 @@ impl Disney {
             |cos: f64, a: f64| 1.0 / (cos + (a * a + cos * cos - a * a * cos * cos).sqrt());
         let gr = smith_iso(nl, 0.25) * smith_iso(nv, 0.25);
 
-        let mut f = [0.0; 3];
+        let mut f = [[0.0; 3]; 3];
         for k in 0..3 {
             let cspec0 = mix(
                 self.specular * 0.08 * mix(1.0, tint[k], self.specular_tint),
@@ -145,10 +152,10 @@ impl Disney {
             let csheen = mix(1.0, tint[k], self.sheen_tint);
             let fs = mix(cspec0, 1.0, fh);
             let fsheen = fh * self.sheen * csheen;
-            f[k] = ((1.0 / PI) * mix(fd, ss, self.subsurface) * c[k] + fsheen)
-                * (1.0 - self.metallic)
-                + gs * fs * ds
-                + 0.25 * self.clearcoat * gr * fr * dr;
+            f[0][k] =
+                ((1.0 / PI) * mix(fd, ss, self.subsurface) * c[k] + fsheen) * (1.0 - self.metallic);
+            f[1][k] = gs * fs * ds;
+            f[2][k] = 0.25 * self.clearcoat * gr * fr * dr;
         }
         f
     }
@@ -278,44 +285,51 @@ fn only_contributing_lobes_are_emitted() {
     );
 }
 
-/// Directional albedo of the reference by quadrature over `wi` (f64).
+/// Directional albedo of the reference (f64): the smooth diffuse and sheen term by a
+/// midpoint rule over directions, the specular and clearcoat terms in slope space
+/// (`reference::slope_space_albedo`, stretched by the specular's alphas and, for
+/// GTR1's tails, by 0.1).
 fn reference_albedo(d: &Disney, v: [f64; 3]) -> [f64; 3] {
-    // Gauss-Legendre-free midpoint rule in (cos^2, phi), dense enough for GTR1's peak
-    // at gloss 1 is not needed here: the test's materials keep alpha >= 0.01.
-    let (nt, np) = (800, 400);
+    let (nt, np) = (400, 200);
     let mut sum = [0.0; 3];
     for i in 0..nt {
-        // mu = cos theta_i with the substitution mu = s^2 (dense at grazing).
+        // mu = cos theta_i = s^2 (dense at grazing); d(omega) = 2 s ds d(phi).
         let s = (i as f64 + 0.5) / nt as f64;
         let mu = s * s;
         let st = (1.0 - mu * mu).sqrt();
         for j in 0..np {
             let phi = 2.0 * PI * (j as f64 + 0.5) / np as f64;
             let l = [st * phi.cos(), st * phi.sin(), mu];
-            let f = d.brdf(l, v);
-            // d(omega) = d(mu) d(phi), d(mu) = 2 s ds.
+            let f = d.brdf_terms(l, v)[0];
             let w = mu * 2.0 * s / nt as f64 * 2.0 * PI / np as f64;
             for k in 0..3 {
                 sum[k] += f[k] * w;
             }
         }
     }
+    let aspect = (1.0 - 0.9 * d.anisotropic).sqrt();
+    let a = d.roughness * d.roughness;
+    let (ax, ay) = ((a / aspect).max(0.001), (a * aspect).max(0.001));
+    for (k, sum) in sum.iter_mut().enumerate() {
+        *sum += reference::slope_space_albedo(ax, ay, v, 600, |l, v| d.brdf_terms(l, v)[1][k]);
+        if d.clearcoat > 0.0 {
+            *sum +=
+                reference::slope_space_albedo(0.1, 0.1, v, 600, |l, v| d.brdf_terms(l, v)[2][k]);
+        }
+    }
     sum
 }
 
 /// The material's albedo (lobe selection, a scanline host's ambient term) against
-/// quadrature of the reference: within 2% (luminance) where the reference is
-/// resolved by the quadrature (alpha >= 0.04 for the specular, gloss <= 0.5).
+/// quadrature of the reference: within 2% (luminance) up to anisotropic 0.5; above,
+/// the specular's stated tolerance (up to 5% at anisotropic 1) applies.
 #[test]
 fn albedo_matches_quadrature() {
     let registry = registry();
     let mut rng = Rng::new(0x00a1_bed0);
     let mut worst = 0.0f64;
     for _ in 0..40 {
-        let mut d = Disney::random(&mut rng);
-        d.roughness = 0.2 + 0.8 * d.roughness;
-        d.clearcoat_gloss *= 0.5;
-        let d = Disney::rounded(&d);
+        let d = Disney::rounded(&Disney::random(&mut rng));
         let m = material(&registry, &d, 0.0);
         let v = direction(&mut rng);
         if v.z < 0.05 {

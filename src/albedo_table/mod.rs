@@ -33,6 +33,7 @@
 //! The tables' errors against an independent f64 quadrature are measured in
 //! tests/albedo.rs and by the verification harness.
 
+pub mod disney;
 pub mod generate;
 
 use crate::fresnel::{self, FresnelModel};
@@ -191,7 +192,7 @@ impl Table {
 
 /// Grid coordinate of `x` in [0, 1] on `n` points: the lower index and the fraction.
 #[inline(always)]
-fn grid<L: Lane>(x: L, n: usize) -> (L, L) {
+pub(super) fn grid<L: Lane>(x: L, n: usize) -> (L, L) {
     let pos = x.clamp(L::zero(), L::one()) * L::splat((n - 1) as f32);
     let i = pos.floor().min(L::splat((n - 2) as f32));
     (i, pos - i)
@@ -200,7 +201,7 @@ fn grid<L: Lane>(x: L, n: usize) -> (L, L) {
 /// The `C = 2^A` corners `(cell index, weight)` of multilinear interpolation from cell
 /// `base`, over axes `(lower index, fraction, stride in cells)`.
 #[inline(always)]
-fn corners<L: Lane, const A: usize, const C: usize>(
+pub(super) fn corners<L: Lane, const A: usize, const C: usize>(
     base: L,
     axes: [(L, L, usize); A],
 ) -> [(L, L); C] {

@@ -13,8 +13,10 @@
 
 pub mod conductor;
 pub mod dielectric;
+pub mod disney_clearcoat;
 pub mod disney_diffuse;
 pub mod disney_sheen;
+pub mod disney_specular;
 pub mod fresnel_params;
 pub mod lambert;
 pub mod mirror;

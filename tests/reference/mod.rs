@@ -603,3 +603,44 @@ pub fn walter_albedo(m: &Micro, eta: f64, wo: V, importance: bool, n: usize) -> 
     });
     (r, t)
 }
+
+/// `int f(l) cos_l d(omega_l)` over the upper hemisphere for a lobe peaked around the
+/// mirror direction of `v`, integrated over half vectors in slope space stretched by
+/// `(ax, ay)`: `h = normalize(-sx, -sy, 1)`, `(sx, sy) = rho (ax cos psi, ay sin psi)`,
+/// `rho = x / (1 - x)`, `d(omega_l) = 4 |v.h| d(omega_h)`, `d(omega_h) = dsx dsy /
+/// (1 + s^2)^(3/2)`: a microfacet lobe of roughness about `(ax, ay)` is smooth in
+/// `(x, psi)`, so a midpoint rule of `n x n` points resolves it (independent of the
+/// samplers under test). `f` takes `(l, v)` in the local frame.
+#[allow(dead_code)]
+pub fn slope_space_albedo(
+    ax: f64,
+    ay: f64,
+    v: [f64; 3],
+    n: usize,
+    f: impl Fn([f64; 3], [f64; 3]) -> f64,
+) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..n {
+        let x = (i as f64 + 0.5) / n as f64;
+        let rho = x / (1.0 - x);
+        let drho = 1.0 / ((1.0 - x) * (1.0 - x));
+        for j in 0..n {
+            let psi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / n as f64;
+            let (sx, sy) = (rho * ax * psi.cos(), rho * ay * psi.sin());
+            let s2 = sx * sx + sy * sy;
+            let norm = (1.0 + s2).sqrt();
+            let h = [-sx / norm, -sy / norm, 1.0 / norm];
+            let vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
+            if vh <= 0.0 {
+                continue;
+            }
+            let l = [0, 1, 2].map(|k| 2.0 * vh * h[k] - v[k]);
+            if l[2] <= 0.0 {
+                continue;
+            }
+            let jacobian = ax * ay * rho * drho / (1.0 + s2).powf(1.5);
+            sum += f(l, v) * l[2] * 4.0 * vh * jacobian;
+        }
+    }
+    sum * (1.0 / n as f64) * (2.0 * std::f64::consts::PI / n as f64)
+}

@@ -1,0 +1,166 @@
+//! `disney_clearcoat`: the clearcoat lobe of Disney's principled BRDF (Burley 2012,
+//! section 5.4; restated in `shared/reference/formulas.md`):
+//!
+//! ```text
+//! f  = Dr Fr Gr
+//! Dr = GTR1(n.h, a) = (a^2 - 1) / (pi ln(a^2) (1 + (a^2 - 1) cos_h^2)),
+//!      a = mix(0.1, 0.001, gloss)                       (Berry's distribution)
+//! Fr = mix(0.04, 1, FH),  FH = (1 - l.h)^5               (IOR 1.5)
+//! Gr = SmithG_GGX(n.l, 0.25) SmithG_GGX(n.v, 0.25),
+//!      SmithG_GGX(c, a) = 1 / (c + sqrt(a^2 + c^2 - a^2 c^2))
+//! ```
+//!
+//! The masking's roughness is fixed at 0.25 whatever the gloss; `Gr` carries the
+//! microfacet `1 / (4 cos_i cos_o)`. The Disney material weights the lobe by
+//! `0.25 clearcoat`.
+//!
+//! Parameters:
+//! - `gloss` (float, [0, 1], default 1): clearcoatGloss.
+//!
+//! Sampling: GTR1 half vectors in closed form (`phi = 2 pi u0`, `cos_h = sqrt((1 -
+//! (a^2)^(1 - u1)) / (1 - a^2))`), `l = reflect(v, h)`, pdf `Dr cos_h / (4 v.h)`.
+//! Albedo from `albedo_table::disney::ClearcoatTable`. One-sided.
+
+use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
+use crate::albedo_table::disney::ClearcoatTable;
+use crate::fresnel::schlick_weight;
+use crate::math::{Lane, Mask, PI, Rgb, Vec3};
+use crate::params::{ParamSpec, offset_of};
+
+pub struct DisneyClearcoat;
+
+const GLOSS: usize = offset_of(DisneyClearcoat::PARAMS, 0);
+
+pub struct Prepared<L> {
+    gloss: L,
+    /// `a^2` of GTR1.
+    a2: L,
+    /// `(a^2 - 1) / (pi ln(a^2))`, the numerator of GTR1.
+    norm: L,
+}
+
+/// `SmithG_GGX(c, 0.25)`.
+#[inline(always)]
+fn smith<L: Lane>(c: L) -> L {
+    let a2 = L::splat(0.0625);
+    L::one() / (c + (a2 + c * c - a2 * c * c).sqrt())
+}
+
+impl DisneyClearcoat {
+    /// GTR1 at the unit half vector `h`, its denominator `1 + (a^2 - 1) cos_h^2`
+    /// written `a^2 cos_h^2 + sin_h^2` with `sin_h^2` from `h`'s tangent components:
+    /// `1 - cos_h^2` would cancel near the peak, where `a^2` is as small as 1e-6.
+    #[inline(always)]
+    fn d<L: Lane>(p: &Prepared<L>, h: Vec3<L>) -> L {
+        p.norm / (p.a2 * h.z * h.z + h.x * h.x + h.y * h.y)
+    }
+}
+
+impl Model for DisneyClearcoat {
+    const NAME: &'static str = "disney_clearcoat";
+    const SUMMARY: &'static str =
+        "Disney principled clearcoat (Burley 2012): GTR1, Schlick IOR 1.5, masking roughness 0.25";
+    const PARAMS: &'static [ParamSpec] = &[ParamSpec::float(
+        "gloss",
+        1.0,
+        0.0,
+        1.0,
+        "GTR1 alpha mix(0.1, 0.001, gloss)",
+    )];
+    const FLAGS: u32 = flags::REFLECTION | flags::GLOSSY;
+    const RECIPROCAL: bool = true;
+    const VERIFY_CASES: &'static [VerifyCase] = &[
+        VerifyCase {
+            name: "gloss 0",
+            set: &[("gloss", 0.0)],
+        },
+        VerifyCase {
+            name: "gloss 0.5",
+            set: &[("gloss", 0.5)],
+        },
+    ];
+
+    type Prepared<L: Lane> = Prepared<L>;
+
+    /// Table of f64 quadratures, interpolated: measured in
+    /// tests/lobe_disney_clearcoat.rs and by the harness.
+    fn albedo_tolerance(_params: &[f32]) -> f32 {
+        0.02
+    }
+
+    #[inline(always)]
+    fn prepare<L: Lane>(p: Params<'_, L>) -> Prepared<L> {
+        let gloss = p.float(GLOSS);
+        let a = L::splat(0.1) + L::splat(0.001 - 0.1) * gloss;
+        let a2 = a * a;
+        Prepared {
+            gloss,
+            a2,
+            norm: (a2 - L::one()) / (L::splat(PI) * a2.ln()),
+        }
+    }
+
+    #[inline(always)]
+    fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, _mode: Transport) -> Eval<L> {
+        if !wo.z.gt(L::zero()).any() {
+            return Eval::zero();
+        }
+        let hu = wo + wi;
+        let len2 = hu.length_squared();
+        let ok = both_above(wo, wi) & len2.gt(L::zero());
+        let h = hu * (L::one() / len2.sqrt());
+        let d = Self::d(p, h);
+        let vh = wo.dot(h);
+        let pdf = L::select(ok, d * h.z / (L::splat(4.0) * vh), L::zero());
+        let fr = L::splat(0.04) + L::splat(0.96) * schlick_weight(vh);
+        let value = d * fr * smith(wi.z) * smith(wo.z) * wi.z;
+        let value = L::select(ok, value, L::zero());
+        Eval {
+            value: Rgb::new(value, value, value),
+            pdf,
+        }
+    }
+
+    #[inline(always)]
+    fn sample<L: Lane>(
+        p: &Prepared<L>,
+        wo: Vec3<L>,
+        _uc: L,
+        u0: L,
+        u1: L,
+        mode: Transport,
+        settle: &mut impl Settle<L>,
+    ) -> Sample<L> {
+        // (a^2)^(1 - u1) = exp((1 - u1) ln a^2); both factors below are in (0, 1].
+        let t = ((L::one() - u1) * p.a2.ln()).exp();
+        let cos_h = ((L::one() - t) / (L::one() - p.a2))
+            .safe_sqrt()
+            .min(L::one());
+        let sin_h = (L::one() - cos_h * cos_h).safe_sqrt();
+        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u0).sin_cos();
+        let h = Vec3::new(sin_h * cos_phi, sin_h * sin_phi, cos_h);
+        let wi = settle.settle(wo.reflect(h));
+        let e = Self::eval(p, wo, wi, mode);
+        Sample {
+            wi,
+            value: e.value,
+            pdf: e.pdf,
+            valid: both_above(wo, wi) & e.pdf.gt(L::zero()),
+            transmitted: L::Mask::splat(false),
+            delta: L::Mask::splat(false),
+            eta: L::one(),
+            // The width of the coat as a roughness: sqrt(alpha).
+            roughness: (L::splat(0.1) + L::splat(0.001 - 0.1) * p.gloss).sqrt(),
+        }
+    }
+
+    #[inline(always)]
+    fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
+        let a = L::select(
+            wo.z.gt(L::zero()),
+            ClearcoatTable::lookup(wo, p.gloss),
+            L::zero(),
+        );
+        Rgb::new(a, a, a)
+    }
+}
