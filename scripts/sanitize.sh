@@ -62,8 +62,7 @@ if [ "$mode" = hosts ] || [ "$mode" = all ]; then
     small=(--width 24 --height 16 --threads 2 --quiet)
     runs=(
         "build-memcheck/examples/quickstart"
-        "$pt ${small[*]} --spp 2 --out $out/pt_json"
-        "$pt ${small[*]} --spp 2 --closures blocks --out $out/pt_blocks"
+        "$pt ${small[*]} --spp 2 --out $out/pt_showcase"
         "$pt ${small[*]} --spp 2 --scene examples/pathtracer/scenes/torus.json --out $out/pt_torus"
         "$pt ${small[*]} --spp 2 --furnace --material sheen --out $out/pt_sheen"
         "$sl ${small[*]} --out $out/sl_showcase"

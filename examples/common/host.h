@@ -24,8 +24,9 @@ int host_parse_int(const char *opt, const char *s, long lo, long hi, long *out);
 /* Start a host: check the scene options, create a runtime with one Glint thread per call
  * (the hosts run their own threads), load `plugin` (or, when NULL, the Charlie sheen plugin
  * beside the executable if it is there), and initialize and fill `s`: the scene file when
- * `scene_file`, else the white furnace with `material` (a name or closure JSON) when
- * `furnace`, else the showcase (with the sheen sphere when a "charlie" lobe exists).
+ * `scene_file`, else the white furnace with `material` (a name, or the JSON of a closure or
+ * a material document) when `furnace`, else the showcase (with the sheen sphere when a
+ * "charlie" lobe exists).
  * 0, or -1 with a message on stderr; either way the caller frees `s` and `*rt`. */
 int host_open(glint_runtime **rt, ex_scene *s, const char *plugin, const char *scene_file,
               int furnace, const char *material);

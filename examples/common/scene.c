@@ -44,6 +44,28 @@ static const named_material MATERIALS[] = {
                   "\"fresnel\":\"schlick\",\"f0\":1,\"f90\":1}]}"},
     {"white_sheen", "{\"lobes\":[{\"type\":\"lambert\",\"weight\":0.6,\"color\":[1,1,1]},"
                     "{\"type\":\"charlie\",\"weight\":0.4,\"color\":[1,1,1],\"roughness\":0.3}]}"},
+    /* Disney (Burley 2012) material documents, compiled once per scene. Metallic sweep:
+     * a copper-colored base from dielectric to metal. */
+    {"disney_metallic_0", "{\"material\":\"disney\",\"base_color\":[0.95,0.55,0.35],"
+                          "\"metallic\":0,\"roughness\":0.3}"},
+    {"disney_metallic_50", "{\"material\":\"disney\",\"base_color\":[0.95,0.55,0.35],"
+                           "\"metallic\":0.5,\"roughness\":0.3}"},
+    {"disney_metallic_100", "{\"material\":\"disney\",\"base_color\":[0.95,0.55,0.35],"
+                            "\"metallic\":1,\"roughness\":0.3}"},
+    /* Roughness sweep: a green plastic. */
+    {"disney_rough_10", "{\"material\":\"disney\",\"base_color\":[0.10,0.45,0.25],"
+                        "\"roughness\":0.1}"},
+    {"disney_rough_45", "{\"material\":\"disney\",\"base_color\":[0.10,0.45,0.25],"
+                        "\"roughness\":0.45}"},
+    {"disney_rough_80", "{\"material\":\"disney\",\"base_color\":[0.10,0.45,0.25],"
+                        "\"roughness\":0.8}"},
+    /* Car paint: a red half-metallic base under a glossy clearcoat. */
+    {"disney_paint", "{\"material\":\"disney\",\"base_color\":[0.70,0.04,0.04],"
+                     "\"metallic\":0.5,\"roughness\":0.4,\"clearcoat\":1,"
+                     "\"clearcoat_gloss\":0.9}"},
+    /* Fabric: rough diffuse with a tinted sheen at grazing angles. */
+    {"disney_fabric", "{\"material\":\"disney\",\"base_color\":[0.30,0.18,0.55],"
+                      "\"roughness\":0.9,\"sheen\":1,\"sheen_tint\":0.5}"},
     {"ground_light", "{\"lobes\":[{\"type\":\"lambert\",\"color\":[0.50,0.50,0.48]}]}"},
     {"ground_dark", "{\"lobes\":[{\"type\":\"lambert\",\"color\":[0.22,0.22,0.23]}]}"},
 };
@@ -105,7 +127,7 @@ void scene_free(ex_scene *s)
     int i;
     for (i = 0; i < s->material_count; i++) {
         free(s->materials[i].json);
-        material_free_blocks(&s->materials[i]);
+        material_release(&s->materials[i]);
     }
     for (i = 0; i < s->object_count; i++) {
         free(s->objects[i].positions);
@@ -286,14 +308,14 @@ static int check_materials(ex_scene *s, const glint_runtime *rt)
     return ok ? 0 : -1;
 }
 
-int scene_build(ex_scene *s, const glint_runtime *rt, int decode_blocks)
+int scene_build(ex_scene *s, const glint_runtime *rt)
 {
     int i;
     float total = 0.0f, run = 0.0f;
     if (check_materials(s, rt) != 0)
         return -1;
-    for (i = 0; decode_blocks && i < s->material_count; i++)
-        if (material_decode(&s->materials[i], rt) != 0)
+    for (i = 0; i < s->material_count; i++)
+        if (material_prepare(&s->materials[i], rt) != 0)
             return -1;
     for (i = 0; i < s->object_count; i++) {
         const ex_object *o = &s->objects[i];
@@ -497,6 +519,7 @@ vec3 offset_point(vec3 p, vec3 ng, vec3 dir)
 
 void surface_at(const ex_scene *s, const ex_hit *h, vec3 o, vec3 d, ex_surface *out)
 {
+    static const frame world = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     const ex_object *obj = &s->objects[h->geom];
     const vec3 wo = v_neg(d);
     out->p = v_madd(o, d, h->t);
@@ -542,8 +565,10 @@ void surface_at(const ex_scene *s, const ex_hit *h, vec3 o, vec3 d, ex_surface *
     }
     if (v_dot(wo, out->ns) * v_dot(wo, out->ng) <= 0.0f)
         out->ns = out->ng;
+    out->wo = wo;
     out->fr = frame_from_normal(out->ns);
-    out->wo_local = frame_to_local(&out->fr, wo);
+    out->space = s->materials[out->material].compiled ? world : out->fr;
+    out->wo_space = frame_to_local(&out->space, wo);
 }
 
 int delta_light_count(const ex_scene *s) { return s->point_light_count + s->dir_light_count; }
@@ -591,7 +616,11 @@ void scene_showcase(ex_scene *s, int with_sheen)
     static const char *const names[8] = {"clay",  "aluminium",   "coated", "sheen",
                                          "gold",  "glass", "rough_glass", "mirror"};
     static const float xs[8] = {-2.45f, -1.05f, 0.35f, 1.75f, -1.75f, -0.35f, 1.05f, 2.45f};
+    static const char *const disney[8] = {
+        "disney_metallic_0", "disney_metallic_50", "disney_metallic_100", "disney_paint",
+        "disney_fabric",     "disney_rough_10",    "disney_rough_45",     "disney_rough_80"};
     const float radius = 0.6f, row_z = 0.8f;
+    const float disney_radius = 0.4f, disney_step = 0.92f, disney_z = 2.2f;
     int i;
     const int light = scene_add_material(s, "ground_light", material_by_name("ground_light"));
     const int dark = scene_add_material(s, "ground_dark", material_by_name("ground_dark"));
@@ -611,6 +640,13 @@ void scene_showcase(ex_scene *s, int with_sheen)
         m = scene_add_material(s, names[i], material_by_name(names[i]));
         scene_add_sphere(s, v3(x, radius, i < 4 ? -row_z : row_z), radius, m);
     }
+    /* A front row of smaller Disney spheres: the metallic sweep, the car paint, the fabric,
+     * the roughness sweep. */
+    for (i = 0; i < 8; i++) {
+        const int m = scene_add_material(s, disney[i], material_by_name(disney[i]));
+        scene_add_sphere(s, v3(((float)i - 3.5f) * disney_step, disney_radius, disney_z),
+                         disney_radius, m);
+    }
 
     /* A soft box above, left and in front, emitting downward (e1 x e2 points down). */
     scene_add_quad_light(s, v3(-5.5f, 5.5f, 0.5f), v3(5.0f, 0, 0), v3(0, 0, 4.0f),
@@ -623,8 +659,8 @@ void scene_showcase(ex_scene *s, int with_sheen)
     s->env.up_fraction = 0.8f;
     s->env.intensity = 0.55f;
 
-    s->camera.eye = v3(0.0f, 3.0f, 7.4f);
-    s->camera.target = v3(0.0f, 0.45f, 0.0f);
+    s->camera.eye = v3(0.0f, 3.6f, 10.2f);
+    s->camera.target = v3(0.0f, 0.2f, -0.3f);
     s->camera.up = v3(0, 1, 0);
     s->camera.vfov_deg = 30.0f;
 }

@@ -17,7 +17,7 @@ extern const char *scene_program;
 
 /* ---- materials ---------------------------------------------------------------------- */
 
-/* One lobe decoded for glint_closure_add_lobe (material_blocks.c). */
+/* One lobe decoded for glint_closure_add_lobe (materials.c). */
 typedef struct ex_lobe_block {
     uint32_t type;
     float weight[3];
@@ -28,21 +28,29 @@ typedef struct ex_lobe_block {
 
 typedef struct ex_material {
     char name[64];
-    char *json;    /* the closure description given to glint_closure_from_json */
+    /* The description: a closure ({"lobes": [...]}) or a material document
+     * ({"material": "disney", ...}). Read only while the scene is built. */
+    char *json;
     int transmits; /* has a lobe that transmits: closed surfaces, the normal is not flipped */
-    /* Closures built lobe by lobe: the same closure decoded once (material_decode). */
+    /* A material document compiled once (glint_material_create), NULL for a closure given
+     * as lobes. Its closures are built from a shading context in world space. */
+    glint_material *compiled;
+    /* A closure given as lobes, built lobe by lobe from blocks decoded once, in the shading
+     * frame (z = the shading normal). */
     ex_lobe_block *lobes;
     int lobe_count;
     uint32_t closure_flags;
 } ex_material;
 
-/* Decode m->json into lobe blocks and check them against glint_closure_from_json.
- * 0, or -1 with a message on stderr. */
-int material_decode(ex_material *m, const glint_runtime *rt);
-/* Build m's closure lobe by lobe from its decoded blocks. */
+/* Make m ready to shade: compile a material document, or decode a closure's lobes into
+ * blocks and check them against glint_closure_from_json. 0, or -1 with a message on
+ * stderr naming the material. */
+int material_prepare(ex_material *m, const glint_runtime *rt);
+/* Build the closure of a material given as lobes from its decoded blocks. */
 glint_status material_build(const ex_material *m, const glint_runtime *rt, glint_arena *arena,
                             const glint_vec3 *wo, glint_closure **out);
-void material_free_blocks(ex_material *m);
+/* Release what material_prepare made. */
+void material_release(ex_material *m);
 
 /* The named materials of the showcase and tests ("gold", "glass", ...): JSON or NULL. */
 const char *material_by_name(const char *name);
@@ -137,10 +145,10 @@ void scene_add_quad_light(ex_scene *s, vec3 corner, vec3 e1, vec3 e2, vec3 radia
 void scene_add_point_light(ex_scene *s, vec3 position, vec3 intensity);
 /* `direction` points toward the light; it is normalized. */
 void scene_add_dir_light(ex_scene *s, vec3 direction, vec3 irradiance);
-/* Checks every material against the runtime (errors name the material), decodes them into
- * parameter blocks when `decode_blocks`, builds the Embree scene and the light selection
- * table. Returns 0, or -1 with a message on stderr. */
-int scene_build(ex_scene *s, const glint_runtime *rt, int decode_blocks);
+/* Checks every material against the runtime and prepares it (material_prepare; errors name
+ * the material), builds the Embree scene and the light selection table. Returns 0, or -1
+ * with a message on stderr. */
+int scene_build(ex_scene *s, const glint_runtime *rt);
 
 /* Built-in scenes. The showcase: a checker ground and a sphere per material under a soft box
  * and a sky. */
@@ -184,16 +192,25 @@ int scene_occluded(const ex_scene *s, struct RTCIntersectContext *ctx, vec3 o, v
                    float tfar);
 
 /* A shading point: position, geometric and shading normals facing the viewer unless the
- * material transmits, the shading frame (z = ns) Glint works in, wo in that frame. */
+ * material transmits, the shading frame (z = ns, tangent t), wo, and the space Glint's
+ * directions live in for this material: the shading frame for a closure given as lobes (its
+ * lobes keep their default normal, z), world space (the identity) for a compiled material,
+ * whose closure is built in the context's frame. */
 typedef struct ex_surface {
-    vec3 p, ng, ns;
+    vec3 p, ng, ns, wo;
     frame fr;
-    vec3 wo_local;
+    frame space;
+    vec3 wo_space; /* wo in `space` */
     int material;
 } ex_surface;
 
 /* The shading point of a hit of the ray o + t d on a surface (not a light). */
 void surface_at(const ex_scene *s, const ex_hit *h, vec3 o, vec3 d, ex_surface *out);
+
+/* The closure of surface point `sf` in `arena`: glint_material_closure with the point's
+ * shading context for a compiled material, material_build otherwise. No JSON is read. */
+glint_status surface_closure(const ex_scene *s, const glint_runtime *rt, glint_arena *arena,
+                             const ex_surface *sf, glint_closure **out);
 
 /* Move a surface point off the surface, to the side of `dir`. */
 vec3 offset_point(vec3 p, vec3 ng, vec3 dir);

@@ -120,7 +120,8 @@ static const char *get_string(const cJSON *obj, const char *key)
 }
 
 /* A material reference: a name from "materials", a built-in name, or an inline closure
- * description ({"lobes": [...]}). Returns the index or -1. */
+ * ({"lobes": [...]}) or material document ({"material": "disney", ...}). Returns the index
+ * or -1. */
 static int material_ref(const loader *ld, const char *where, const cJSON *v)
 {
     ex_scene *s = ld->scene;
@@ -151,7 +152,8 @@ static int material_ref(const loader *ld, const char *where, const cJSON *v)
         cJSON_free(json);
         return m;
     }
-    fail(ld, where, "\"material\" must be a material name or a closure description");
+    fail(ld, where, "\"material\" must be a material name, a closure description "
+                    "({\"lobes\": [...]}) or a material document ({\"material\": ...})");
     return -1;
 }
 
@@ -499,14 +501,17 @@ int scene_load_file(ex_scene *s, const char *path)
     if (item) {
         const cJSON *m;
         if (!cJSON_IsObject(item)) {
-            fail(&ld, "materials", "must be an object of name: closure description");
+            fail(&ld, "materials", "must be an object of name: closure description or material "
+                                   "document");
             goto out;
         }
         cJSON_ArrayForEach(m, item)
         {
             char *json;
             if (!cJSON_IsObject(m)) {
-                fail(&ld, "materials", "each material must be a closure description object");
+                fail(&ld, "materials", "each material must be a closure description "
+                                       "({\"lobes\": [...]}) or a material document "
+                                       "({\"material\": ...})");
                 goto out;
             }
             json = cJSON_PrintUnformatted(m);

@@ -24,9 +24,6 @@ static void usage(FILE *f)
             "                          (default: render)\n"
             "  --seed S                random seed (default 1)\n"
             "  --strategy S            mis (default) | bsdf | light\n"
-            "  --closures C            per-hit closures: json (default: glint_closure_from_json\n"
-            "                          with the material's JSON) | blocks (parameter blocks\n"
-            "                          decoded once, glint_closure_add_lobe per hit)\n"
             "  --scene FILE.json       render a scene file instead of the showcase\n"
             "  --plugin PATH           load a Glint plugin (default: " CHARLIE_FILE
             " next to\n"
@@ -34,7 +31,8 @@ static void usage(FILE *f)
             "  --furnace               white furnace: one sphere in a uniform environment\n"
             "                          of radiance 1\n"
             "  --material M            the furnace sphere's material: a name (see\n"
-            "                          --list-materials) or closure JSON (default: white)\n"
+            "                          --list-materials) or JSON: a closure or a material\n"
+            "                          document (default: white)\n"
             "  --pixel-center          one camera ray through each pixel's center (no jitter)\n"
             "  --aovs                  add variance.R/G/B (variance of each pixel's mean,\n"
             "                          from its samples) and coverage to the EXR\n"
@@ -124,17 +122,6 @@ int main(int argc, char **argv)
                         "pathtracer: --strategy expects mis, bsdf or light, got \"%s\"\n", v);
                 return EXIT_FAILURE;
             }
-        } else if (strcmp(a, "--closures") == 0) {
-            NEED_VALUE;
-            if (strcmp(v, "json") == 0)
-                set.closures = CLOSURES_JSON;
-            else if (strcmp(v, "blocks") == 0)
-                set.closures = CLOSURES_BLOCKS;
-            else {
-                fprintf(stderr,
-                        "pathtracer: --closures expects json or blocks, got \"%s\"\n", v);
-                return EXIT_FAILURE;
-            }
         } else if (strcmp(a, "--furnace") == 0) {
             furnace = 1;
         } else if (strcmp(a, "--pixel-center") == 0) {
@@ -161,7 +148,7 @@ int main(int argc, char **argv)
     }
     if (host_open(&rt, &scene, plugin, scene_file, furnace, material) != 0)
         goto done;
-    if (scene_build(&scene, rt, set.closures == CLOSURES_BLOCKS) != 0)
+    if (scene_build(&scene, rt) != 0)
         goto done;
 
     npix = (size_t)set.width * (size_t)set.height;
@@ -175,12 +162,10 @@ int main(int argc, char **argv)
 
     if (!set.quiet)
         fprintf(stderr,
-                "pathtracer: %s, %dx%d, %d spp, max depth %d, %d thread%s, strategy %s, "
-                "closures from %s\n",
+                "pathtracer: %s, %dx%d, %d spp, max depth %d, %d thread%s, strategy %s\n",
                 scene_file ? scene_file : furnace ? "white furnace" : "material showcase",
                 set.width, set.height, set.spp, set.max_depth, set.threads,
-                set.threads == 1 ? "" : "s", strategy_names[set.strategy],
-                set.closures == CLOSURES_BLOCKS ? "parameter blocks" : "JSON");
+                set.threads == 1 ? "" : "s", strategy_names[set.strategy]);
     if (render(&scene, rt, &set, &acc, &stats) != 0) {
         fprintf(stderr, "pathtracer: rendering failed\n");
         goto done_acc;
@@ -255,10 +240,9 @@ int main(int argc, char **argv)
     } else {
         /* Each timed call adds timer_inside_ns to the Glint time and timer_pair_ns to the
          * thread's time: report the shares without them (and the raw measurement). */
-        const char *kinds[GLINT_KINDS] = {set.closures == CLOSURES_BLOCKS
-                                              ? "closure build (reset + lobe blocks)"
-                                              : "closure build (reset + JSON parse)",
-                                          "glint_eval", "glint_sample"};
+        static const char *const kinds[GLINT_KINDS] = {
+            "closure build (reset + lobe blocks)", "closure build (reset + compiled material)",
+            "glint_eval", "glint_sample"};
         const double calls = (double)stats.glint_calls;
         const double thread = stats.thread_seconds - calls * stats.timer_pair_ns * 1e-9;
         const double glint = stats.glint_seconds - calls * stats.timer_inside_ns * 1e-9;
@@ -273,7 +257,7 @@ int main(int argc, char **argv)
         for (k = 0; k < GLINT_KINDS; k++) {
             const double n = (double)stats.glint_kind_calls[k];
             const double t = stats.glint_kind_seconds[k] - n * stats.timer_inside_ns * 1e-9;
-            printf("  %-36s %5.1f%% of thread time, %6.1f M calls, %5.0f ns each\n", kinds[k],
+            printf("  %-41s %5.1f%% of thread time, %6.1f M calls, %5.0f ns each\n", kinds[k],
                    thread > 0 ? 100.0 * t / thread : 0.0, n * 1e-6, n > 0 ? t * 1e9 / n : 0.0);
         }
     }

@@ -9,11 +9,9 @@
 /* ---- rendering --------------------------------------------------------------------- */
 
 enum { STRATEGY_MIS, STRATEGY_BSDF, STRATEGY_LIGHT };
-/* How the per-hit closure is built: glint_closure_from_json, or lobe by lobe. */
-enum { CLOSURES_JSON, CLOSURES_BLOCKS };
 
 typedef struct pt_settings {
-    int width, height, spp, max_depth, rr_depth, threads, strategy, closures, quiet;
+    int width, height, spp, max_depth, rr_depth, threads, strategy, quiet;
     int pixel_center; /* camera rays through pixel centers, no jitter */
     int timing; /* time every Glint call (clock_gettime) */
     uint64_t seed;
@@ -26,10 +24,10 @@ typedef struct pt_accum {
     uint32_t *hits; /* camera samples whose first ray hit geometry */
 } pt_accum;
 
-/* Kinds of timed Glint calls: building a closure (glint_arena_reset then
- * glint_closure_from_json or the lobe-by-lobe calls, one interval), glint_eval,
- * glint_sample. */
-enum { GLINT_BUILD, GLINT_EVAL, GLINT_SAMPLE, GLINT_KINDS };
+/* Kinds of timed Glint calls: building a closure (glint_arena_reset, then the lobe-by-lobe
+ * calls for a closure given as lobes or glint_material_closure for a compiled material; one
+ * interval), glint_eval, glint_sample. */
+enum { GLINT_BUILD_LOBES, GLINT_BUILD_MATERIAL, GLINT_EVAL, GLINT_SAMPLE, GLINT_KINDS };
 
 typedef struct pt_stats {
     double seconds;        /* wall clock of the render */

@@ -1,10 +1,12 @@
 /* render.c: the integrator (unidirectional path tracing with next-event estimation and
  * multiple importance sampling), threads over tiles, progress and statistics.
  *
- * Every surface is shaded by Glint: per hit, the material's closure is built from its JSON
- * in the thread's arena, in the hit's shading frame. The host keeps that frame: directions
- * go to Glint in local coordinates (z = shading normal), so the material JSON keeps its
- * default normal [0, 0, 1], and sampled directions come back through the same frame.
+ * Every surface is shaded by Glint: per hit, the material's closure is built in the thread's
+ * arena from what was prepared once per scene material, never from JSON (surface_closure):
+ * a compiled material's with glint_material_closure and the hit's shading context in world
+ * space; a closure given as lobes from its decoded blocks in the hit's shading frame, where
+ * its lobes keep their default normal [0, 0, 1]. Directions go to Glint and come back in
+ * the hit's `space` (world, or that frame).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -134,7 +136,8 @@ static vec3 unoccluded_f(worker *w, const glint_closure *closure, const ex_surfa
     memset(&e, 0, sizeof e);
     e.struct_size = sizeof e;
     *pdf = 0.0f;
-    GLINT_TIMED(w, GLINT_EVAL, st, glint_eval(closure, sf->wo_local, frame_to_local(&sf->fr, wi), &e));
+    GLINT_TIMED(w, GLINT_EVAL, st,
+                glint_eval(closure, sf->wo_space, frame_to_local(&sf->space, wi), &e));
     if (st != GLINT_OK) {
         record_error(w, "glint_eval", st);
         return v3(0, 0, 0);
@@ -148,15 +151,12 @@ static vec3 unoccluded_f(worker *w, const glint_closure *closure, const ex_surfa
     return v3(e.value[0], e.value[1], e.value[2]);
 }
 
-static glint_status build_closure(worker *w, const ex_material *mat, const glint_vec3 *wo,
-                                  glint_closure **out)
+static glint_status build_closure(worker *w, const ex_surface *sf, glint_closure **out)
 {
     const glint_status st = glint_arena_reset(w->arena);
     if (st != GLINT_OK)
         return st;
-    if (w->sh->set->closures == CLOSURES_BLOCKS)
-        return material_build(mat, w->sh->rt, w->arena, wo, out);
-    return glint_closure_from_json(w->sh->rt, w->arena, mat->json, wo, out);
+    return surface_closure(w->sh->scene, w->sh->rt, w->arena, sf, out);
 }
 
 static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
@@ -179,7 +179,7 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
         ex_surface sf;
         glint_closure *closure = NULL;
         glint_status st;
-        int i;
+        int i, compiled;
 
         w->rays++;
         if (!scene_intersect(s, &w->ictx, o, d, &h)) {
@@ -212,12 +212,12 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
         surface_at(s, &h, o, d, &sf);
 
         /* One timed interval: reset the arena, build the closure. */
-        GLINT_TIMED(w, GLINT_BUILD, st, build_closure(w, &s->materials[sf.material], &sf.wo_local, &closure));
+        compiled = s->materials[sf.material].compiled != NULL;
+        GLINT_TIMED(w, compiled ? GLINT_BUILD_MATERIAL : GLINT_BUILD_LOBES, st,
+                    build_closure(w, &sf, &closure));
         w->closures++;
         if (st != GLINT_OK) {
-            record_error(w, set->closures == CLOSURES_BLOCKS ? "building a closure"
-                                                             : "glint_closure_from_json",
-                         st);
+            record_error(w, compiled ? "glint_material_closure" : "building a closure", st);
             break;
         }
 
@@ -273,14 +273,14 @@ static vec3 trace(worker *w, rng *r, vec3 o, vec3 d, int *primary_hit)
             vec3 wi;
             memset(&smp, 0, sizeof smp);
             smp.struct_size = sizeof smp;
-            GLINT_TIMED(w, GLINT_SAMPLE, st, glint_sample(closure, sf.wo_local, ul, u0, u1, &smp));
+            GLINT_TIMED(w, GLINT_SAMPLE, st, glint_sample(closure, sf.wo_space, ul, u0, u1, &smp));
             if (st == GLINT_NO_SAMPLE)
                 break;
             if (st != GLINT_OK) {
                 record_error(w, "glint_sample", st);
                 break;
             }
-            wi = frame_to_world(&sf.fr, smp.wi);
+            wi = frame_to_world(&sf.space, smp.wi);
             if (!side_ok(wi, sf.ng, sf.ns))
                 break;
             beta = v_mul(beta, v3(smp.weight[0], smp.weight[1], smp.weight[2]));

@@ -2,13 +2,16 @@
  * 001's reflection equation, on Glint's batch API.
  *
  * Pass 1 fills a G-buffer: one Embree primary ray through each pixel's center gives the
- * shading point (position, normals, frame, material, wo in the shading frame), or the
- * radiance of the light or environment the ray sees. Pass 2 shades the image a scanline at
- * a time: every surface pixel's closure is built lobe by lobe in the thread's arena (one
- * closure per pixel of the row), then
- *   L = L_ambient * albedo(wo) + sum over lights of f(wo, wi) |cos| E_light V
- * with one glint_albedo_batch for the ambient term and one glint_eval_batch per light, the
- * row's closures as per-lane closures and the shadowed or unlit pixels masked off.
+ * shading point (position, normals, frame, material, wo), or the radiance of the light or
+ * environment the ray sees. Pass 2 shades the image a scanline at a time,
+ *   L = L_ambient * albedo(wo) + sum over lights of f(wo, wi) |cos| E_light V,
+ * with the row's surface pixels as lanes grouped by material:
+ *  - compiled materials (material documents): per material, one glint_material_albedo_batch
+ *    and one glint_material_eval_batch per light over its lanes (world-space wo, normal and
+ *    tangent per lane); no closure is built;
+ *  - closures given as lobes: each pixel's closure built lobe by lobe in the thread's arena,
+ *    then one glint_albedo_batch and one glint_eval_batch per light over per-lane closures.
+ * Shadowed or unlit lanes are masked off.
  *
  * Lights: the scene's point and directional lights; a quad light, which a scanline renderer
  * has no way to sample, is stood in for by a point light at its center with its on-axis
@@ -37,8 +40,9 @@ typedef struct settings {
 enum { PIX_MISS, PIX_LIGHT, PIX_SURFACE };
 
 /* Kinds of timed Glint calls: building closures (glint_arena_reset, the lobe-by-lobe
- * calls), batch calls (glint_albedo_batch, glint_eval_batch). */
-enum { GLINT_BUILD, GLINT_BATCH, GLINT_KINDS };
+ * calls), batch calls over closures (glint_albedo_batch, glint_eval_batch), material batch
+ * calls (glint_material_albedo_batch, glint_material_eval_batch). */
+enum { GLINT_BUILD, GLINT_BATCH, GLINT_MATERIAL_BATCH, GLINT_KINDS };
 
 /* One G-buffer pixel: what the primary ray saw. */
 typedef struct gpixel {
@@ -59,17 +63,24 @@ typedef struct shared {
     atomic_int next_row;
 } shared;
 
-/* Per-thread state; the row arrays hold one entry per pixel of a scanline. */
+/* Per-thread state. The row's surface pixels are lanes grouped by material: closures given
+ * as lobes first, lanes [group[0], group[1]), then compiled material m's lanes
+ * [group[m + 1], group[m + 2]). The lane arrays hold up to one row. */
 typedef struct worker {
     shared *sh;
     pthread_t thread;
     struct RTCIntersectContext ictx;
     glint_arena *arena;
+    int *group;     /* material_count + 2 lane offsets */
+    int *pixel;     /* the pixel (x) of each lane */
     const glint_closure **closures;
     uint8_t *has_closure, *lit;
-    float *wo[3], *wi[3], *value[3], *pdf;
+    /* In the lane's Glint space (ex_surface.space): wo, wi. In world space: the shading
+     * normal and tangent compiled materials are given. */
+    float *wo[3], *wi[3], *normal[3], *tangent[3], *value[3], *pdf;
     vec3 *irradiance;
-    uint64_t glint_ns[GLINT_KINDS], glint_calls[GLINT_KINDS], rays, closures_built, errors;
+    uint64_t glint_ns[GLINT_KINDS], glint_calls[GLINT_KINDS], rays, closures_built;
+    uint64_t material_lanes, errors;
     double seconds[2];
     char first_error[256];
 } worker;
@@ -118,126 +129,220 @@ static void gbuffer_row(worker *w, int y)
         (w)->glint_calls[kind]++;                                                            \
     } while (0)
 
-/* Build the closure of every surface pixel of row y; returns how many were built. */
-static int build_row_closures(worker *w, const gpixel *row)
+static void put_lane(float *const soa[3], int lane, vec3 v)
+{
+    soa[0][lane] = v.x;
+    soa[1][lane] = v.y;
+    soa[2][lane] = v.z;
+}
+
+/* A surface pixel's bucket: 0 for the materials given as lobes, m + 1 for compiled
+ * material m. */
+static int lane_bucket(const ex_scene *s, const ex_surface *sf)
+{
+    return s->materials[sf->material].compiled ? sf->material + 1 : 0;
+}
+
+/* Group the row's surface pixels into lanes by bucket (a counting sort) and fill the lanes'
+ * wo, normal and tangent. Returns the number of lanes. */
+static int group_row(worker *w, const gpixel *row)
+{
+    const ex_scene *s = w->sh->scene;
+    const int width = w->sh->view.width, buckets = s->material_count + 1;
+    int *group = w->group;
+    int x, b;
+    memset(group, 0, (size_t)(buckets + 1) * sizeof *group);
+    for (x = 0; x < width; x++)
+        if (row[x].kind == PIX_SURFACE)
+            group[lane_bucket(s, &row[x].sf) + 1]++;
+    for (b = 0; b < buckets; b++)
+        group[b + 1] += group[b];
+    /* Placing a lane advances its bucket's offset to the next bucket's start: shift back. */
+    for (x = 0; x < width; x++)
+        if (row[x].kind == PIX_SURFACE) {
+            const ex_surface *sf = &row[x].sf;
+            const int l = group[lane_bucket(s, sf)]++;
+            w->pixel[l] = x;
+            put_lane(w->wo, l, sf->wo_space);
+            put_lane(w->normal, l, sf->ns);
+            put_lane(w->tangent, l, sf->fr.t);
+        }
+    for (b = buckets; b > 0; b--)
+        group[b] = group[b - 1];
+    group[0] = 0;
+    w->material_lanes += (uint64_t)(group[buckets] - group[1]);
+    return group[buckets];
+}
+
+/* Build the closure of every lane whose material is given as lobes. */
+static void build_lobe_closures(worker *w, const gpixel *row)
 {
     const shared *sh = w->sh;
-    const int width = sh->view.width;
     glint_status st;
-    int x, built = 0;
+    int l;
+    if (w->group[1] == 0)
+        return;
     GLINT_TIMED(w, GLINT_BUILD, st, glint_arena_reset(w->arena));
     if (st != GLINT_OK) {
         record_error(w, "glint_arena_reset", st);
-        return 0;
+        memset(w->has_closure, 0, (size_t)w->group[1]);
+        return;
     }
-    for (x = 0; x < width; x++) {
-        const gpixel *g = &row[x];
+    for (l = 0; l < w->group[1]; l++) {
+        const ex_surface *sf = &row[w->pixel[l]].sf;
         glint_closure *c = NULL;
-        w->closures[x] = NULL;
-        w->has_closure[x] = 0;
-        if (g->kind != PIX_SURFACE)
-            continue;
         GLINT_TIMED(w, GLINT_BUILD, st,
-                    material_build(&sh->scene->materials[g->sf.material], sh->rt, w->arena,
-                                   &g->sf.wo_local, &c));
+                    material_build(&sh->scene->materials[sf->material], sh->rt, w->arena,
+                                   &sf->wo_space, &c));
         w->closures_built++;
-        if (st != GLINT_OK) {
+        if (st != GLINT_OK)
             record_error(w, "building a closure", st);
-            continue;
-        }
-        w->closures[x] = c;
-        w->has_closure[x] = 1;
-        w->wo[0][x] = g->sf.wo_local.x;
-        w->wo[1][x] = g->sf.wo_local.y;
-        w->wo[2][x] = g->sf.wo_local.z;
-        built++;
+        w->closures[l] = c;
+        w->has_closure[l] = st == GLINT_OK;
     }
-    return built;
 }
 
-/* rgb += ambient * albedo(wo) over the row's closures. */
-static void shade_ambient(worker *w, float *rgb)
+/* Lanes [first, first + count) of compiled material m, with an optional active mask. */
+static glint_material_lanes material_lanes(const worker *w, int m, int first, int count,
+                                           const uint8_t *active)
 {
-    const int width = w->sh->view.width;
+    glint_material_lanes ln;
+    memset(&ln, 0, sizeof ln);
+    ln.material = w->sh->scene->materials[m].compiled;
+    ln.count = (size_t)count;
+    ln.active = active ? active + first : NULL;
+    ln.wo_x = w->wo[0] + first;
+    ln.wo_y = w->wo[1] + first;
+    ln.wo_z = w->wo[2] + first;
+    ln.normal_x = w->normal[0] + first;
+    ln.normal_y = w->normal[1] + first;
+    ln.normal_z = w->normal[2] + first;
+    ln.tangent_x = w->tangent[0] + first;
+    ln.tangent_y = w->tangent[1] + first;
+    ln.tangent_z = w->tangent[2] + first;
+    return ln;
+}
+
+/* rgb += ambient * albedo(wo) over the row's lanes. */
+static void shade_ambient(worker *w, int lanes, float *rgb)
+{
     const vec3 a = w->sh->ambient;
-    glint_albedo_batch_args args;
+    const int lobe_lanes = w->group[1];
     glint_status st;
-    int x;
-    memset(&args, 0, sizeof args);
-    args.struct_size = sizeof args;
-    args.count = (size_t)width;
-    args.closures = w->closures;
-    args.active = w->has_closure;
-    args.wo_x = w->wo[0];
-    args.wo_y = w->wo[1];
-    args.wo_z = w->wo[2];
-    args.albedo_r = w->value[0];
-    args.albedo_g = w->value[1];
-    args.albedo_b = w->value[2];
-    GLINT_TIMED(w, GLINT_BATCH, st, glint_albedo_batch(&args));
-    if (st != GLINT_OK)
-        record_error(w, "glint_albedo_batch", st);
-    for (x = 0; x < width; x++)
-        if (w->has_closure[x]) {
-            rgb[3 * x + 0] += a.x * w->value[0][x];
-            rgb[3 * x + 1] += a.y * w->value[1][x];
-            rgb[3 * x + 2] += a.z * w->value[2][x];
+    int m, l;
+    if (lobe_lanes > 0) {
+        glint_albedo_batch_args args;
+        memset(&args, 0, sizeof args);
+        args.struct_size = sizeof args;
+        args.count = (size_t)lobe_lanes;
+        args.closures = w->closures;
+        args.active = w->has_closure;
+        args.wo_x = w->wo[0];
+        args.wo_y = w->wo[1];
+        args.wo_z = w->wo[2];
+        args.albedo_r = w->value[0];
+        args.albedo_g = w->value[1];
+        args.albedo_b = w->value[2];
+        GLINT_TIMED(w, GLINT_BATCH, st, glint_albedo_batch(&args));
+        if (st != GLINT_OK)
+            record_error(w, "glint_albedo_batch", st);
+    }
+    for (m = 0; m < w->sh->scene->material_count; m++) {
+        const int first = w->group[m + 1], count = w->group[m + 2] - first;
+        glint_material_albedo_batch_args args;
+        if (count == 0)
+            continue;
+        memset(&args, 0, sizeof args);
+        args.struct_size = sizeof args;
+        args.lanes = material_lanes(w, m, first, count, NULL);
+        args.albedo_r = w->value[0] + first;
+        args.albedo_g = w->value[1] + first;
+        args.albedo_b = w->value[2] + first;
+        GLINT_TIMED(w, GLINT_MATERIAL_BATCH, st, glint_material_albedo_batch(&args));
+        if (st != GLINT_OK)
+            record_error(w, "glint_material_albedo_batch", st);
+    }
+    for (l = 0; l < lanes; l++)
+        if (l >= lobe_lanes || w->has_closure[l]) {
+            float *px = &rgb[3 * w->pixel[l]];
+            px[0] += a.x * w->value[0][l];
+            px[1] += a.y * w->value[1][l];
+            px[2] += a.z * w->value[2][l];
         }
 }
 
-/* rgb += f(wo, wi) |cos| E V for delta light `light` over the row. */
-static void shade_light(worker *w, const gpixel *row, int light, float *rgb)
+/* rgb += f(wo, wi) |cos| E V for delta light `light` over the row's lanes. */
+static void shade_light(worker *w, const gpixel *row, int lanes, int light, float *rgb)
 {
     const shared *sh = w->sh;
-    const int width = sh->view.width;
-    glint_eval_batch_args args;
+    const int lobe_lanes = w->group[1];
     glint_status st;
-    int x, lit = 0;
-    for (x = 0; x < width; x++) {
-        const ex_surface *sf = &row[x].sf;
+    int l, m, lit = 0;
+    for (l = 0; l < lanes; l++) {
+        const ex_surface *sf = &row[w->pixel[l]].sf;
         vec3 wi, so, sd;
         float len;
-        w->lit[x] = 0;
-        if (!w->has_closure[x] ||
-            !delta_light_at(sh->scene, light, sf, &wi, &so, &sd, &len, &w->irradiance[x]) ||
-            v_is_zero(w->irradiance[x]))
+        w->lit[l] = 0;
+        if ((l < lobe_lanes && !w->has_closure[l]) ||
+            !delta_light_at(sh->scene, light, sf, &wi, &so, &sd, &len, &w->irradiance[l]) ||
+            v_is_zero(w->irradiance[l]))
             continue;
         w->rays++;
         if (scene_occluded(sh->scene, &w->ictx, so, sd, len))
             continue;
-        wi = frame_to_local(&sf->fr, wi);
-        w->wi[0][x] = wi.x;
-        w->wi[1][x] = wi.y;
-        w->wi[2][x] = wi.z;
-        w->lit[x] = 1;
+        put_lane(w->wi, l, frame_to_local(&sf->space, wi));
+        w->lit[l] = 1;
         lit++;
     }
     if (!lit)
         return;
-    memset(&args, 0, sizeof args);
-    args.struct_size = sizeof args;
-    args.count = (size_t)width;
-    args.closures = w->closures;
-    args.active = w->lit;
-    args.wo_x = w->wo[0];
-    args.wo_y = w->wo[1];
-    args.wo_z = w->wo[2];
-    args.wi_x = w->wi[0];
-    args.wi_y = w->wi[1];
-    args.wi_z = w->wi[2];
-    args.value_r = w->value[0];
-    args.value_g = w->value[1];
-    args.value_b = w->value[2];
-    args.pdf = w->pdf;
-    GLINT_TIMED(w, GLINT_BATCH, st, glint_eval_batch(&args));
-    if (st != GLINT_OK)
-        record_error(w, "glint_eval_batch", st);
-    for (x = 0; x < width; x++)
-        if (w->lit[x]) {
-            const vec3 e = w->irradiance[x];
-            rgb[3 * x + 0] += w->value[0][x] * e.x;
-            rgb[3 * x + 1] += w->value[1][x] * e.y;
-            rgb[3 * x + 2] += w->value[2][x] * e.z;
+    if (memchr(w->lit, 1, (size_t)lobe_lanes)) {
+        glint_eval_batch_args args;
+        memset(&args, 0, sizeof args);
+        args.struct_size = sizeof args;
+        args.count = (size_t)lobe_lanes;
+        args.closures = w->closures;
+        args.active = w->lit;
+        args.wo_x = w->wo[0];
+        args.wo_y = w->wo[1];
+        args.wo_z = w->wo[2];
+        args.wi_x = w->wi[0];
+        args.wi_y = w->wi[1];
+        args.wi_z = w->wi[2];
+        args.value_r = w->value[0];
+        args.value_g = w->value[1];
+        args.value_b = w->value[2];
+        args.pdf = w->pdf;
+        GLINT_TIMED(w, GLINT_BATCH, st, glint_eval_batch(&args));
+        if (st != GLINT_OK)
+            record_error(w, "glint_eval_batch", st);
+    }
+    for (m = 0; m < sh->scene->material_count; m++) {
+        const int first = w->group[m + 1], count = w->group[m + 2] - first;
+        glint_material_eval_batch_args args;
+        if (count == 0 || !memchr(w->lit + first, 1, (size_t)count))
+            continue;
+        memset(&args, 0, sizeof args);
+        args.struct_size = sizeof args;
+        args.lanes = material_lanes(w, m, first, count, w->lit);
+        args.wi_x = w->wi[0] + first;
+        args.wi_y = w->wi[1] + first;
+        args.wi_z = w->wi[2] + first;
+        args.value_r = w->value[0] + first;
+        args.value_g = w->value[1] + first;
+        args.value_b = w->value[2] + first;
+        args.pdf = w->pdf + first;
+        GLINT_TIMED(w, GLINT_MATERIAL_BATCH, st, glint_material_eval_batch(&args));
+        if (st != GLINT_OK)
+            record_error(w, "glint_material_eval_batch", st);
+    }
+    for (l = 0; l < lanes; l++)
+        if (w->lit[l]) {
+            const vec3 e = w->irradiance[l];
+            float *px = &rgb[3 * w->pixel[l]];
+            px[0] += w->value[0][l] * e.x;
+            px[1] += w->value[1][l] * e.y;
+            px[2] += w->value[2][l] * e.z;
         }
 }
 
@@ -247,19 +352,21 @@ static void shade_row(worker *w, int y)
     const int width = sh->view.width;
     const gpixel *row = &sh->gbuf[(size_t)y * (size_t)width];
     float *rgb = &sh->rgb[3 * (size_t)y * (size_t)width];
-    int x, i;
+    int x, i, lanes;
     for (x = 0; x < width; x++) {
         const vec3 e = row[x].kind == PIX_SURFACE ? v3(0, 0, 0) : row[x].radiance;
         rgb[3 * x + 0] = e.x;
         rgb[3 * x + 1] = e.y;
         rgb[3 * x + 2] = e.z;
     }
-    if (build_row_closures(w, row) == 0)
+    lanes = group_row(w, row);
+    if (lanes == 0)
         return;
+    build_lobe_closures(w, row);
     if (!v_is_zero(sh->ambient))
-        shade_ambient(w, rgb);
+        shade_ambient(w, lanes, rgb);
     for (i = 0; i < delta_light_count(sh->scene); i++)
-        shade_light(w, row, i, rgb);
+        shade_light(w, row, lanes, i, rgb);
 }
 
 /* ---- threads ---------------------------------------------------------------------------- */
@@ -314,18 +421,23 @@ static int worker_init(worker *w, shared *sh, int width)
         fprintf(stderr, "scanline: glint_arena_create: %s\n", glint_last_error());
         return -1;
     }
+    w->group = calloc((size_t)sh->scene->material_count + 2, sizeof *w->group);
+    w->pixel = calloc(n, sizeof *w->pixel);
     w->closures = calloc(n, sizeof *w->closures);
     w->has_closure = calloc(n, 1);
     w->lit = calloc(n, 1);
     w->pdf = calloc(n, sizeof(float));
     w->irradiance = calloc(n, sizeof *w->irradiance);
-    if (!w->closures || !w->has_closure || !w->lit || !w->pdf || !w->irradiance)
+    if (!w->group || !w->pixel || !w->closures || !w->has_closure || !w->lit || !w->pdf ||
+        !w->irradiance)
         return -1;
     for (k = 0; k < 3; k++) {
         w->wo[k] = calloc(n, sizeof(float));
         w->wi[k] = calloc(n, sizeof(float));
+        w->normal[k] = calloc(n, sizeof(float));
+        w->tangent[k] = calloc(n, sizeof(float));
         w->value[k] = calloc(n, sizeof(float));
-        if (!w->wo[k] || !w->wi[k] || !w->value[k])
+        if (!w->wo[k] || !w->wi[k] || !w->normal[k] || !w->tangent[k] || !w->value[k])
             return -1;
     }
     return 0;
@@ -335,6 +447,8 @@ static void worker_free(worker *w)
 {
     int k;
     glint_arena_destroy(w->arena);
+    free(w->group);
+    free(w->pixel);
     free((void *)w->closures);
     free(w->has_closure);
     free(w->lit);
@@ -343,6 +457,8 @@ static void worker_free(worker *w)
     for (k = 0; k < 3; k++) {
         free(w->wo[k]);
         free(w->wi[k]);
+        free(w->normal[k]);
+        free(w->tangent[k]);
         free(w->value[k]);
     }
 }
@@ -364,7 +480,8 @@ static void usage(FILE *f)
             "                          the executable, if there)\n"
             "  --furnace               one sphere in a uniform environment of radiance 1\n"
             "  --material M            the furnace sphere's material: a name (see\n"
-            "                          --list-materials) or closure JSON (default: white)\n"
+            "                          --list-materials) or JSON: a closure or a material\n"
+            "                          document (default: white)\n"
             "  --quiet                 print only the summary\n"
             "  --list-materials        print the named materials and exit\n");
 }
@@ -419,8 +536,9 @@ int main(int argc, char **argv)
     worker *workers = NULL;
     double seconds[2];
     size_t npix, nonfinite = 0;
-    uint64_t rays = 0, closures = 0, errors = 0, glint_calls[GLINT_KINDS] = {0, 0};
-    double glint_s[GLINT_KINDS] = {0.0, 0.0}, thread_s = 0.0;
+    uint64_t rays = 0, closures = 0, material_lanes = 0, errors = 0;
+    uint64_t glint_calls[GLINT_KINDS] = {0, 0, 0};
+    double glint_s[GLINT_KINDS] = {0.0, 0.0, 0.0}, thread_s = 0.0;
     int k;
     char first_error[256] = "";
 
@@ -500,7 +618,7 @@ int main(int argc, char **argv)
         const vec3 center = v_add(l->corner, v_scale(v_add(l->e1, l->e2), 0.5f));
         scene_add_point_light(&scene, center, v_scale(l->radiance, l->area));
     }
-    if (scene_build(&scene, rt, 1) != 0)
+    if (scene_build(&scene, rt) != 0)
         goto done;
 
     npix = (size_t)set.width * (size_t)set.height;
@@ -539,6 +657,7 @@ int main(int argc, char **argv)
         const worker *w = &workers[i];
         rays += w->rays;
         closures += w->closures_built;
+        material_lanes += w->material_lanes;
         for (k = 0; k < GLINT_KINDS; k++) {
             glint_calls[k] += w->glint_calls[k];
             glint_s[k] += (double)w->glint_ns[k] * 1e-9;
@@ -556,12 +675,15 @@ int main(int argc, char **argv)
         goto done;
 
     printf("G-buffer: %.1f ms, %.2f M primary rays/s\n"
-           "shading:  %.1f ms, %.2f M pixels/s, %.3f M closures, %.1f M rays in all\n",
+           "shading:  %.1f ms (%.1f us per row), %.2f M pixels/s, %.3f M closures, %.3f M "
+           "compiled-material lanes, %.1f M rays in all\n",
            seconds[0] * 1e3, (double)npix * 1e-6 / seconds[0], seconds[1] * 1e3,
-           (double)npix * 1e-6 / seconds[1], (double)closures * 1e-6, (double)rays * 1e-6);
+           seconds[1] * 1e6 / set.height, (double)npix * 1e-6 / seconds[1],
+           (double)closures * 1e-6, (double)material_lanes * 1e-6, (double)rays * 1e-6);
     for (k = 0; k < GLINT_KINDS; k++) {
         static const char *const kinds[GLINT_KINDS] = {
-            "closure builds (arena reset + lobe blocks)", "batch calls (albedo, eval)"};
+            "closure builds (arena reset + lobe blocks)", "batch calls on closures",
+            "material batch calls"};
         printf("  %-42s %5.1f%% of shading-thread time, %7.0f calls, %6.0f ns each\n",
                kinds[k], thread_s > 0.0 ? 100.0 * glint_s[k] / thread_s : 0.0,
                (double)glint_calls[k], glint_calls[k] ? glint_s[k] * 1e9 / glint_calls[k] : 0.0);

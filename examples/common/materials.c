@@ -1,10 +1,14 @@
-/* material_blocks.c: materials decoded once into Glint parameter blocks, so that the
- * per-hit closure is built lobe by lobe (glint_closure_begin / glint_closure_add_lobe /
- * glint_closure_finish) instead of by parsing JSON at every hit (--closures blocks).
+/* materials.c: scene materials prepared once, so that no JSON is read per shading point.
  *
- * The decoding follows the JSON closure format of the README through Glint's registry
- * (glint_lobe_type_find, glint_lobe_param_defaults, glint_lobe_param_find,
- * glint_lobe_param_info, glint_lobe_param_choice), and material_decode checks the result
+ * A material document ({"material": "disney", ...}) is compiled with glint_material_create;
+ * its closure at a hit comes from glint_material_closure with the hit's shading context
+ * (surface_closure), and the scanline host shades it with the material batch calls.
+ *
+ * A closure given as lobes ({"lobes": [...]}) is decoded into Glint parameter blocks and
+ * built lobe by lobe per hit (glint_closure_begin / glint_closure_add_lobe /
+ * glint_closure_finish). The decoding follows the JSON closure format of the README through
+ * Glint's registry (glint_lobe_type_find, glint_lobe_param_defaults, glint_lobe_param_find,
+ * glint_lobe_param_info, glint_lobe_param_choice), and material_prepare checks the result
  * against glint_closure_from_json: both closures must give identical eval results. */
 #include <math.h>
 #include <stdio.h>
@@ -49,6 +53,9 @@ static int decode_lobe(ex_material *m, const glint_runtime *rt, const cJSON *lob
     memset(out, 0, sizeof *out);
     out->weight[0] = out->weight[1] = out->weight[2] = 1.0f;
     out->frame.normal = v3(0, 0, 1);
+    if (cJSON_IsObject(lobe) && cJSON_GetObjectItemCaseSensitive(lobe, "material"))
+        return bad(m, index, "a material entry cannot be built lobe by lobe; give the material "
+                             "as a document of its own ({\"material\": ...})");
     if (!cJSON_IsObject(lobe) || !cJSON_IsString(type))
         return bad(m, index, "needs a \"type\" string");
     if (glint_lobe_type_find(rt, type->valuestring, &out->type) != GLINT_OK)
@@ -155,7 +162,7 @@ static int self_check(ex_material *m, const glint_runtime *rt)
     return ok ? 0 : -1;
 }
 
-int material_decode(ex_material *m, const glint_runtime *rt)
+int material_prepare(ex_material *m, const glint_runtime *rt)
 {
     cJSON *root = cJSON_Parse(m->json);
     const cJSON *lobes, *lobe, *transport;
@@ -164,13 +171,22 @@ int material_decode(ex_material *m, const glint_runtime *rt)
         fprintf(stderr, "%s: material \"%s\": malformed JSON\n", scene_program, m->name);
         return -1;
     }
+    if (cJSON_GetObjectItemCaseSensitive(root, "material")) {
+        if (glint_material_create(rt, m->json, &m->compiled) == GLINT_OK)
+            rc = 0;
+        else
+            fprintf(stderr, "%s: material \"%s\": %s\n", scene_program, m->name,
+                    glint_last_error());
+        goto out;
+    }
     lobes = cJSON_GetObjectItemCaseSensitive(root, "lobes");
     transport = cJSON_GetObjectItemCaseSensitive(root, "transport");
     m->closure_flags = 0;
     if (cJSON_IsString(transport) && strcmp(transport->valuestring, "importance") == 0)
         m->closure_flags = GLINT_CLOSURE_IMPORTANCE;
     if (!cJSON_IsArray(lobes) || cJSON_GetArraySize(lobes) > GLINT_MAX_LOBES) {
-        fprintf(stderr, "%s: material \"%s\": needs a \"lobes\" array\n", scene_program, m->name);
+        fprintf(stderr, "%s: material \"%s\": needs a \"lobes\" array or a \"material\" type\n",
+                scene_program, m->name);
         goto out;
     }
     m->lobes = calloc((size_t)cJSON_GetArraySize(lobes) + 1, sizeof *m->lobes);
@@ -178,7 +194,7 @@ int material_decode(ex_material *m, const glint_runtime *rt)
         goto out;
     cJSON_ArrayForEach(lobe, lobes)
     {
-        m->lobe_count = n + 1; /* so material_free releases a partly decoded lobe */
+        m->lobe_count = n + 1; /* so material_release frees a partly decoded lobe */
         if (decode_lobe(m, rt, lobe, n, &m->lobes[n]) != 0)
             goto out;
         n++;
@@ -189,13 +205,34 @@ out:
     return rc;
 }
 
-
-void material_free_blocks(ex_material *m)
+void material_release(ex_material *m)
 {
     int i;
+    glint_material_destroy(m->compiled);
+    m->compiled = NULL;
     for (i = 0; i < m->lobe_count; i++)
         free(m->lobes[i].params);
     free(m->lobes);
     m->lobes = NULL;
     m->lobe_count = 0;
+}
+
+glint_status surface_closure(const ex_scene *s, const glint_runtime *rt, glint_arena *arena,
+                             const ex_surface *sf, glint_closure **out)
+{
+    const ex_material *m = &s->materials[sf->material];
+    glint_shading_context ctx;
+    if (!m->compiled)
+        return material_build(m, rt, arena, &sf->wo_space, out);
+    /* Objects do not move, so the rest position is the world one. The scenes have no
+     * texture coordinates, and the hosts track no ray footprint: uv and footprint stay 0. */
+    memset(&ctx, 0, sizeof ctx);
+    ctx.struct_size = sizeof ctx;
+    ctx.wo = sf->wo;
+    ctx.normal = sf->ns;
+    ctx.tangent = sf->fr.t; /* the host's frame, as closures given as lobes get it */
+    ctx.geometric_normal = sf->ng;
+    ctx.position = sf->p;
+    ctx.reference_position = sf->p;
+    return glint_material_closure(m->compiled, arena, &ctx, NULL, 0, out);
 }
