@@ -46,6 +46,7 @@ LOOP_LIB = ROOT / "target" / "bench-loop.so"
 ALPHA = 0.2  # Mitsuba's GGX alpha; Glint's roughness is sqrt(alpha)
 IOR = 1.5
 DIFFUSE = 0.5
+PRINCIPLED_BASE = [0.8, 0.2, 0.1]
 CASES = ["roughconductor-F1", "roughconductor-Au", "roughdielectric", "diffuse", "principled"]
 SIZES = [64, 256, 4096, 65536, 1 << 20]
 QUICK_SIZES = [64, 4096, 1 << 20]
@@ -236,7 +237,7 @@ def inputs(n, transmit, np):
 
 
 def case_table(au_eta, au_k):
-    """{case: (Mitsuba dict, Glint lobe JSON or None, wi below the surface too)}."""
+    """{case: (Mitsuba dict, Glint lobe or material JSON or None, wi below the surface too)}."""
     rough = math.sqrt(ALPHA)
     return {
         "roughconductor-F1": (
@@ -257,7 +258,16 @@ def case_table(au_eta, au_k):
         "diffuse": (
             {"type": "diffuse", "reflectance": {"type": "rgb", "value": DIFFUSE}},
             {"type": "lambert", "color": DIFFUSE}, False),
-        "principled": ({"type": "principled"}, None, False),
+        # Every lobe on in both (Glint: Burley 2012's diffuse + subsurface blend, sheen,
+        # anisotropic GTR2, GTR1 clearcoat; Mitsuba: its principled, Burley 2015's
+        # model without transmission), so values differ by model, not by error.
+        "principled": (
+            {"type": "principled", "base_color": {"type": "rgb", "value": PRINCIPLED_BASE},
+             "metallic": 0.3, "roughness": 0.5, "anisotropic": 0.4, "sheen": 1.0,
+             "clearcoat": 1.0, "clearcoat_gloss": 0.8, "specular": 0.5},
+            {"material": "disney", "base_color": PRINCIPLED_BASE, "metallic": 0.3,
+             "roughness": 0.5, "anisotropic": 0.4, "sheen": 1.0, "subsurface": 0.5,
+             "clearcoat": 1.0, "clearcoat_gloss": 0.8, "specular": 0.5}, False),
     }
 
 

@@ -1,7 +1,7 @@
 //! Fresnel reflectance: Schlick, exact dielectric, exact conductor, and
 //! Gulbrandsen's artist-friendly conductor parameterization.
 
-use crate::math::{Lane, Rgb};
+use crate::math::{Lane, Rgb, Vec3};
 
 /// Generalized Schlick: `F0 + (F90 - F0) (1 - cos)^5` (Schlick 1994; seed 000's `FrnlBlend`).
 #[inline(always)]
@@ -13,6 +13,17 @@ pub fn schlick<L: Lane>(f0: L, f90: L, cos_theta: L) -> L {
 #[inline(always)]
 pub fn schlick_weight<L: Lane>(cos_theta: L) -> L {
     let m = (L::one() - cos_theta).clamp(L::zero(), L::one());
+    let m2 = m * m;
+    m2 * m2 * m
+}
+
+/// Burley's `FH = (1 - l.h)^5` of a reflection pair, symmetric in `wo` and `wi` (so
+/// reciprocal to the last bit) and without cancellation as `l.h -> 1`: with
+/// `l.h = sqrt((1 + wo.wi) / 2)`, `1 - l.h = |wo - wi|^2 / (4 (1 + l.h))`.
+#[inline(always)]
+pub fn schlick_weight_pair<L: Lane>(wo: Vec3<L>, wi: Vec3<L>) -> L {
+    let cos_d = ((L::one() + wo.dot(wi)) * L::splat(0.5)).safe_sqrt();
+    let m = ((wo - wi).length_squared() * L::splat(0.25) / (L::one() + cos_d)).min(L::one());
     let m2 = m * m;
     m2 * m2 * m
 }

@@ -5,17 +5,47 @@
 //! machines). Regenerate every table with
 //! `GLINT_BLESS=1 cargo test --release --test albedo_tables` (minutes on 2 cores) and
 //! commit `data/albedo/`; `GLINT_BLESS=<text>` regenerates only the tables whose file
-//! name contains `<text>`.
+//! name contains `<text>` (`disney`: the Disney specular and clearcoat tables).
 
 use glint::albedo_table::Table;
+use glint::albedo_table::disney::{ClearcoatTable, SpecularTable};
 use glint::albedo_table::generate::{cell, generate, quantize};
 use std::path::PathBuf;
 
 fn path(table: Table) -> PathBuf {
+    data(&table.file_name())
+}
+
+fn data(file: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("data/albedo")
-        .join(table.file_name())
+        .join(file)
 }
+
+/// The Disney lobes' tables: file, cells, channels, generator, one cell.
+type DisneyTable = (
+    &'static str,
+    usize,
+    usize,
+    fn() -> Vec<u8>,
+    fn(usize) -> Vec<f64>,
+);
+const DISNEY: [DisneyTable; 2] = [
+    (
+        SpecularTable::FILE,
+        SpecularTable::CELLS,
+        SpecularTable::CHANNELS,
+        SpecularTable::generate,
+        SpecularTable::cell,
+    ),
+    (
+        ClearcoatTable::FILE,
+        ClearcoatTable::CELLS,
+        ClearcoatTable::CHANNELS,
+        ClearcoatTable::generate,
+        ClearcoatTable::cell,
+    ),
+];
 
 /// Cells to recompute: both ends and 40 from a fixed-seed LCG.
 fn sampled_cells(cells: usize) -> Vec<usize> {
@@ -64,6 +94,36 @@ fn committed_tables_match_their_generator() {
                     failures.push(format!(
                         "{} cell {index} channel {k}: committed {committed}, generated {}",
                         table.file_name(),
+                        quantize(value)
+                    ));
+                }
+            }
+        }
+    }
+    for (file, cells, channels, generate, cell) in DISNEY {
+        if let Some(bless) = std::env::var_os("GLINT_BLESS")
+            && (bless == "1" || file.contains(&*bless.to_string_lossy()))
+        {
+            let start = std::time::Instant::now();
+            std::fs::write(data(file), generate()).expect("write table");
+            eprintln!("{file}: {:?}", start.elapsed());
+        }
+        let bytes = std::fs::read(data(file)).unwrap_or_default();
+        if bytes.len() != 2 * cells * channels {
+            failures.push(format!(
+                "{file}: {} bytes, the layout needs {}",
+                bytes.len(),
+                2 * cells * channels
+            ));
+            continue;
+        }
+        for index in sampled_cells(cells) {
+            for (k, value) in cell(index).into_iter().enumerate() {
+                let at = 2 * (index * channels + k);
+                let committed = u16::from_le_bytes([bytes[at], bytes[at + 1]]);
+                if committed.abs_diff(quantize(value)) > 1 {
+                    failures.push(format!(
+                        "{file} cell {index} channel {k}: committed {committed}, generated {}",
                         quantize(value)
                     ));
                 }

@@ -1,14 +1,16 @@
 //! Directional albedo of the Disney specular and clearcoat lobes (Burley 2012), whose
-//! masking (separable Smith with a remapped or fixed roughness) the committed
-//! microfacet tables do not describe. Both tables are small and integrated in f64 on
-//! first use (0.5 s on two cores, once per process), by stratified quadrature in the lobe's
-//! own sampling variables, where the sample weights are smooth:
+//! masking (separable Smith with a remapped or fixed roughness) the microfacet tables
+//! do not describe. Both are integrated offline in f64 by stratified quadrature in the
+//! lobe's own sampling variables and committed in `data/albedo/` as 16-bit codes
+//! (tests/albedo_tables.rs spot-checks them; `GLINT_BLESS=disney` regenerates them):
 //!
 //! - specular ([`SpecularTable`]): Schlick's split `f0 A + B`, `A = E[(1 - s) w]`,
 //!   `B = E[s w]`, `s = (1 - l.h)^5`, over visible GGX normals of `(ax, ay)` with
-//!   `w = 4 cos_o cos_i Gs(l) Gs(v) / G1(v)` (12 x 12 strata); axes `sqrt(cos_o)` (32
-//!   nodes), roughness (33), anisotropic (9) and the azimuth of `wo` from the tangent
-//!   (13, 0..90 degrees: at aspect 10 the grazing albedo doubles between the axes);
+//!   `w = 4 cos_o cos_i Gs(l) Gs(v) / G1(v)` (48 x 48 strata: the weights jump where
+//!   reflected directions cross the horizon);
+//!   axes `sqrt(cos_o)` (32 nodes), roughness (33), anisotropic (9) and the azimuth of
+//!   `wo` from the tangent (13, 0..90 degrees: at aspect 10 the grazing albedo doubles
+//!   between the axes);
 //! - clearcoat ([`ClearcoatTable`]): `E[Fr Gr 4 cos_i (v.h) / cos_h]` over GTR1 half
 //!   vectors (128 x 128 strata); axes `sqrt(cos_o)` (32) and gloss (17).
 //!
@@ -25,8 +27,9 @@ const NR: usize = 33;
 const NA: usize = 9;
 const NP: usize = 13;
 const NG: usize = 17;
-/// Strata per axis of each cell's quadrature.
-const STRATA: usize = 12;
+/// Strata per axis of each specular cell's quadrature (the weights of wide lobes jump
+/// where reflected directions cross the horizon).
+const STRATA: usize = 48;
 const COAT_STRATA: usize = 128;
 
 /// `cos_o` of node `i` of the `sqrt(cos_o)` axis (dense toward grazing).
@@ -89,17 +92,18 @@ fn reflect(v: [f64; 3], m: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|k| d * m[k] - v[k])
 }
 
-/// `(A, B)` of the specular at `v` (f64 quadrature over `STRATA^2` visible normals).
+/// `(A, B)` of the specular at `v` (f64 quadrature over stratified visible normals).
 pub fn specular_cell(v: [f64; 3], roughness: f64, anisotropic: f64) -> [f64; 2] {
     let (a, g) = specular_alphas(roughness, anisotropic);
+    let strata = STRATA;
     let g1 =
         2.0 * v[2] / (v[2] + ((a[0] * v[0]).powi(2) + (a[1] * v[1]).powi(2) + v[2] * v[2]).sqrt());
     let gv = smith_separable(v, g);
     let mut sum = [0.0; 2];
-    for i in 0..STRATA {
-        for j in 0..STRATA {
-            let u0 = (i as f64 + 0.5) / STRATA as f64;
-            let u1 = (j as f64 + 0.5) / STRATA as f64;
+    for i in 0..strata {
+        for j in 0..strata {
+            let u0 = (i as f64 + 0.5) / strata as f64;
+            let u1 = (j as f64 + 0.5) / strata as f64;
             let m = ggx_visible(v, a, u0, u1);
             let l = reflect(v, m);
             if l[2] <= 0.0 {
@@ -111,7 +115,7 @@ pub fn specular_cell(v: [f64; 3], roughness: f64, anisotropic: f64) -> [f64; 2] 
             sum[1] += w * s;
         }
     }
-    sum.map(|x| x / (STRATA * STRATA) as f64)
+    sum.map(|x| x / (strata * strata) as f64)
 }
 
 /// The clearcoat's GTR1 alpha for `gloss`.
@@ -151,16 +155,28 @@ fn view(mu: f64, phi: f64) -> [f64; 3] {
     [s * phi.cos(), s * phi.sin(), mu]
 }
 
-/// Values of a table in cell order, computed once, on all cores.
-fn build(cells: usize, channels: usize, cell: impl Fn(usize) -> Vec<f64> + Sync) -> Vec<f32> {
+/// The committed values of a table (16-bit codes, as the microfacet tables).
+fn decode(bytes: &[u8], len: usize, name: &str) -> Vec<f32> {
+    assert_eq!(
+        bytes.len(),
+        2 * len,
+        "data/albedo/{name} does not match its layout: regenerate it with \
+         GLINT_BLESS=disney cargo test --release --test albedo_tables"
+    );
+    bytes
+        .chunks_exact(2)
+        .map(|b| super::generate::dequantize(u16::from_le_bytes([b[0], b[1]])))
+        .collect()
+}
+
+/// Every cell of a table, integrated on all cores, as 16-bit codes.
+fn generate(cells: usize, cell: impl Fn(usize) -> Vec<f64> + Sync) -> Vec<u8> {
     use rayon::prelude::*;
     (0..cells)
         .into_par_iter()
-        .flat_map_iter(|i| {
-            let v = cell(i);
-            debug_assert_eq!(v.len(), channels);
-            v.into_iter().map(|x| x as f32)
-        })
+        .flat_map_iter(|i| cell(i).into_iter())
+        .map(super::generate::quantize)
+        .flat_map(|code| code.to_le_bytes())
         .collect()
 }
 
@@ -168,15 +184,31 @@ fn build(cells: usize, channels: usize, cell: impl Fn(usize) -> Vec<f64> + Sync)
 pub struct SpecularTable;
 
 impl SpecularTable {
+    pub const FILE: &'static str = "disney_specular.u16";
+    pub const CELLS: usize = NP * NA * NR * NM;
+    pub const CHANNELS: usize = 2;
+
+    /// `(A, B)` of cell `i` (`[phi][anisotropic][roughness][mu]`).
+    pub fn cell(i: usize) -> Vec<f64> {
+        let (m, r, a, p) = (i % NM, i / NM % NR, i / (NM * NR) % NA, i / (NM * NR * NA));
+        let phi = p as f64 / (NP - 1) as f64 * PI / 2.0;
+        let v = view(mu_node(m), phi);
+        specular_cell(v, r as f64 / (NR - 1) as f64, a as f64 / (NA - 1) as f64).to_vec()
+    }
+
+    /// The whole table as committed (minutes on two cores).
+    pub fn generate() -> Vec<u8> {
+        generate(Self::CELLS, Self::cell)
+    }
+
     fn values() -> &'static [f32] {
         static VALUES: OnceLock<Vec<f32>> = OnceLock::new();
         VALUES.get_or_init(|| {
-            build(NP * NA * NR * NM, 2, |i| {
-                let (m, r, a, p) = (i % NM, i / NM % NR, i / (NM * NR) % NA, i / (NM * NR * NA));
-                let phi = p as f64 / (NP - 1) as f64 * PI / 2.0;
-                let v = view(mu_node(m), phi);
-                specular_cell(v, r as f64 / (NR - 1) as f64, a as f64 / (NA - 1) as f64).to_vec()
-            })
+            decode(
+                include_bytes!("../../data/albedo/disney_specular.u16"),
+                Self::CELLS * Self::CHANNELS,
+                Self::FILE,
+            )
         })
     }
 
@@ -215,16 +247,32 @@ impl SpecularTable {
 pub struct ClearcoatTable;
 
 impl ClearcoatTable {
+    pub const FILE: &'static str = "disney_clearcoat.u16";
+    pub const CELLS: usize = NG * NM;
+    pub const CHANNELS: usize = 1;
+
+    /// The albedo of cell `i` (`[gloss][mu]`).
+    pub fn cell(i: usize) -> Vec<f64> {
+        let (m, g) = (i % NM, i / NM);
+        vec![clearcoat_cell(
+            view(mu_node(m), 0.0),
+            g as f64 / (NG - 1) as f64,
+        )]
+    }
+
+    /// The whole table as committed.
+    pub fn generate() -> Vec<u8> {
+        generate(Self::CELLS, Self::cell)
+    }
+
     fn values() -> &'static [f32] {
         static VALUES: OnceLock<Vec<f32>> = OnceLock::new();
         VALUES.get_or_init(|| {
-            build(NG * NM, 1, |i| {
-                let (m, g) = (i % NM, i / NM);
-                vec![clearcoat_cell(
-                    view(mu_node(m), 0.0),
-                    g as f64 / (NG - 1) as f64,
-                )]
-            })
+            decode(
+                include_bytes!("../../data/albedo/disney_clearcoat.u16"),
+                Self::CELLS * Self::CHANNELS,
+                Self::FILE,
+            )
         })
     }
 

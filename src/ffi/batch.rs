@@ -616,6 +616,8 @@ unsafe fn material_lanes<'a>(
             let given = input(l.overrides, l.override_count, "overrides")?;
             for (i, o) in given.iter().enumerate() {
                 let kind = super::material::param_kind(o.param_type, &format!("overrides[{i}]"))?;
+                // The schema first: a wrong index or type names itself, not its arrays.
+                material.override_spec(i, o.param, kind)?;
                 let mut value: [&[f32]; 3] = [&[]; 3];
                 for (c, v) in value.iter_mut().enumerate().take(kind.size()) {
                     *v = input(o.value[c], n, format_args!("overrides[{i}].value[{c}]"))?;

@@ -23,7 +23,7 @@
 
 use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
 use crate::albedo_table::disney::ClearcoatTable;
-use crate::fresnel::schlick_weight;
+use crate::fresnel::schlick_weight_pair;
 use crate::math::{Lane, Mask, PI, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
 
@@ -112,7 +112,7 @@ impl Model for DisneyClearcoat {
         let d = Self::d(p, h);
         let vh = wo.dot(h);
         let pdf = L::select(ok, d * h.z / (L::splat(4.0) * vh), L::zero());
-        let fr = L::splat(0.04) + L::splat(0.96) * schlick_weight(vh);
+        let fr = L::splat(0.04) + L::splat(0.96) * schlick_weight_pair(wo, wi);
         let value = d * fr * smith(wi.z) * smith(wo.z) * wi.z;
         let value = L::select(ok, value, L::zero());
         Eval {

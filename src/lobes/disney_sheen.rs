@@ -20,7 +20,7 @@
 
 use super::lambert::cosine_hemisphere;
 use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
-use crate::fresnel::schlick_weight;
+use crate::fresnel::schlick_weight_pair;
 use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
 
@@ -54,8 +54,11 @@ const ALBEDO_FIT: [f32; 15] = [
 /// `FH cos_i`, 0 unless both directions are above the surface.
 #[inline(always)]
 fn shape<L: Lane>(wo: Vec3<L>, wi: Vec3<L>) -> L {
-    let cos_h = ((L::one() + wo.dot(wi)) * L::splat(0.5)).safe_sqrt();
-    L::select(both_above(wo, wi), schlick_weight(cos_h) * wi.z, L::zero())
+    L::select(
+        both_above(wo, wi),
+        schlick_weight_pair(wo, wi) * wi.z,
+        L::zero(),
+    )
 }
 
 impl Model for DisneySheen {

@@ -73,6 +73,11 @@ impl LobeType for MaterialLobe {
         let Some(c) = self.closure(params, wo) else {
             return Eval::zero();
         };
+        // Normalized as the C boundary does (a sample is valued at that direction).
+        let Ok(wi) = Vec3::try_unit(wi.x, wi.y, wi.z, "wi") else {
+            return Eval::zero();
+        };
+        let wo = Vec3::try_unit(wo.x, wo.y, wo.z, "wo").unwrap_or(wo);
         c.eval_forward(wo, wi).map_or(Eval::zero(), |e| Eval {
             value: e.value,
             pdf: e.pdf,
