@@ -1,5 +1,6 @@
-//! The verification harness: the fast tier passes for every registered lobe, and each
-//! deliberately broken lobe is caught by the check that matches its defect.
+//! The verification harness: the fast tier passes for every registered lobe and
+//! material, and each deliberately broken lobe is caught by the check that matches
+//! its defect.
 
 use glint::lobes::{Eval, LobeType, Sample, Transport, flags};
 use glint::math::{Rgb, Vec3};
@@ -13,10 +14,19 @@ fn fast_tier_passes_for_every_registered_lobe() {
     let registry = Registry::with_builtins();
     let report = verify::verify_registry(&registry, Tier::Fast);
     let verified: Vec<&str> = report.lobes.iter().map(|l| l.lobe.as_str()).collect();
+    let materials: Vec<String> = registry
+        .material_names()
+        .iter()
+        .map(|m| format!("material {m}"))
+        .collect();
+    let expected: Vec<&str> = registry
+        .names()
+        .into_iter()
+        .chain(materials.iter().map(String::as_str))
+        .collect();
     assert_eq!(
-        verified,
-        registry.names(),
-        "every registered lobe is verified"
+        verified, expected,
+        "every registered lobe and material is verified"
     );
     for l in &report.lobes {
         assert!(

@@ -42,13 +42,15 @@ impl MaterialLobe {
         })
     }
 
-    fn closure(&self, params: &[f32], wo: Vec3<f32>) -> Option<Closure> {
+    /// The closure at `wo` and `wo` normalized as the C boundary does (every call of
+    /// the closure takes that one).
+    fn closure(&self, params: &[f32], wo: Vec3<f32>) -> Option<(Closure, Vec3<f32>)> {
         let material = Material::new(&self.registry, self.type_id, Some(params), 0.0).ok()?;
-        // The harness passes unit local directions; a zero-length wo has no closure.
         let wo = Vec3::try_unit(wo.x, wo.y, wo.z, "wo").ok()?;
-        material
+        let closure = material
             .closure(&ShadingContext::new(wo, Frame::IDENTITY), &[])
-            .ok()
+            .ok()?;
+        Some((closure, wo))
     }
 }
 
@@ -70,14 +72,13 @@ impl LobeType for MaterialLobe {
     }
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         debug_assert_eq!(mode, Transport::Radiance);
-        let Some(c) = self.closure(params, wo) else {
+        let Some((c, wo)) = self.closure(params, wo) else {
             return Eval::zero();
         };
         // Normalized as the C boundary does (a sample is valued at that direction).
         let Ok(wi) = Vec3::try_unit(wi.x, wi.y, wi.z, "wi") else {
             return Eval::zero();
         };
-        let wo = Vec3::try_unit(wo.x, wo.y, wo.z, "wo").unwrap_or(wo);
         c.eval_forward(wo, wi).map_or(Eval::zero(), |e| Eval {
             value: e.value,
             pdf: e.pdf,
@@ -85,7 +86,7 @@ impl LobeType for MaterialLobe {
     }
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], _mode: Transport) -> Sample<f32> {
         let failed = crate::lobes::no_sample();
-        let Some(c) = self.closure(params, wo) else {
+        let Some((c, wo)) = self.closure(params, wo) else {
             return failed;
         };
         match c.sample(wo, u) {
@@ -104,7 +105,7 @@ impl LobeType for MaterialLobe {
     }
     fn albedo(&self, params: &[f32], wo: Vec3<f32>, _mode: Transport) -> Rgb<f32> {
         self.closure(params, wo)
-            .and_then(|c| c.albedo(wo).ok())
+            .and_then(|(c, wo)| c.albedo(wo).ok())
             .unwrap_or(Rgb::zero())
     }
     fn verify_cases(&self) -> &[VerifyCase] {
