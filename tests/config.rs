@@ -29,7 +29,15 @@ fn defaults_and_valid_values() {
     );
     assert_eq!(Settings::parse("threads=3").unwrap().threads, 3);
     assert_eq!(Settings::parse("").unwrap().threads, 0);
-    assert_eq!(CONFIG_KEYS, ["isa", "threads", "plugins"]);
+    assert_eq!(CONFIG_KEYS, ["isa", "threads", "plugins", "prune"]);
+    assert_eq!(Settings::parse("").unwrap().prune, 1e-3);
+    assert_eq!(Settings::parse("prune=0").unwrap().prune, 0.0);
+    assert_eq!(Settings::parse("prune=0.25").unwrap().prune, 0.25);
+    for bad in ["prune=-0.1", "prune=2", "prune=nan", "prune=x"] {
+        let e = Settings::parse(bad).unwrap_err();
+        assert_eq!(e.status, Status::OutOfRange, "{bad}");
+        assert!(e.message.contains("[0, 1]"), "{}", e.message);
+    }
     let rt = Runtime::new("isa=scalar").unwrap();
     assert_eq!(rt.settings.isa, IsaSetting::Only(Isa::Scalar));
     assert_eq!(rt.kernels(), Kernels::scalar());
@@ -41,7 +49,9 @@ fn defaults_and_valid_values() {
             "dielectric",
             "mirror",
             "disney_diffuse",
-            "disney_sheen"
+            "disney_sheen",
+            "disney_specular",
+            "disney_clearcoat"
         ]
     );
 }
