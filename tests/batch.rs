@@ -54,6 +54,22 @@ fn closures(rng: &mut Rng) -> Vec<Closure> {
                 ("conductor", conductor().float("roughness", 0.2)),
             ],
         ),
+        // Two narrow lobes (alpha 0.001) peaking at the same direction: each is
+        // evaluated at the other's samples, where the last bit of `wi` moves its value
+        // by 1e-4.
+        (
+            Transport::Radiance,
+            vec![
+                (
+                    "disney_specular",
+                    Block::defaults(lobe("disney_specular")).float("roughness", 0.0),
+                ),
+                (
+                    "disney_clearcoat",
+                    Block::defaults(lobe("disney_clearcoat")).float("gloss", 1.0),
+                ),
+            ],
+        ),
         (
             Transport::Radiance,
             vec![(
@@ -90,7 +106,7 @@ fn closures(rng: &mut Rng) -> Vec<Closure> {
             for (name, block) in lobes {
                 let id = registry.find(name).unwrap();
                 let mut block = block.clone();
-                if copy == 1 && *name != "lambert" && *name != "mirror" {
+                if copy == 1 && block.has("roughness") {
                     let roughness = block.offset("roughness");
                     let r = block.values[roughness];
                     block.values[roughness] = (r + 0.1 * rng.f32()).min(1.0);
@@ -521,7 +537,8 @@ fn samples_carry_the_eval_at_their_direction_on_every_isa() {
     let n = 2000;
     let l = lanes(n, 1, &mut rng);
     let mut checked = 0;
-    for c in all.iter().filter(|c| c.lobes().len() == 1) {
+    let mut worst_mixture = 0.0f64;
+    for c in &all {
         let per_lane: Vec<&Closure> = vec![c; n];
         for kernels in Kernels::available() {
             let exec = Exec {
@@ -564,6 +581,18 @@ fn samples_carry_the_eval_at_their_direction_on_every_isa() {
                             c.lobes()[0].lobe.name()
                         )
                     };
+                    if c.lobes().len() > 1 {
+                        // Summed in another order than eval sums them: not bit for bit.
+                        let rel = |a: f32, b: f32| {
+                            f64::from((a - b).abs()) / f64::from(a.abs().max(b.abs()).max(1e-30))
+                        };
+                        worst_mixture = (0..3)
+                            .map(|ch| rel(o.s_value[ch][i], value[ch][i]))
+                            .fold(rel(o.s_pdf[i], pdf[i]), f64::max)
+                            .max(worst_mixture);
+                        checked += 1;
+                        continue;
+                    }
                     assert_eq!(o.s_pdf[i].to_bits(), pdf[i].to_bits(), "pdf: {}", what());
                     for (ch, (s, e)) in o.s_value.iter().zip(&value).enumerate() {
                         assert_eq!(s[i].to_bits(), e[i].to_bits(), "value[{ch}]: {}", what());
@@ -574,4 +603,10 @@ fn samples_carry_the_eval_at_their_direction_on_every_isa() {
         }
     }
     assert!(checked > 10_000, "{checked} samples compared");
+    // A few ulps of summation order; before the other lobes saw the sampled `wi` as
+    // an eval does, 1.1e-6 here (5.9e-3 in tests/material_disney.rs).
+    assert!(
+        worst_mixture < 5e-7,
+        "mixture sample vs eval: {worst_mixture:e}"
+    );
 }

@@ -728,7 +728,7 @@ fn sample_chunk(
         let mut job = EvalJob {
             len,
             mode: Transport::Radiance,
-            directions: Directions::Unit,
+            directions: Directions::Sampled,
             wo: view3(wo, len),
             wi: view3(wi, len),
             lobe: rows.lanes(k, lobe.lane_decoded_len(), len),

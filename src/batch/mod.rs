@@ -569,7 +569,12 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
         let mut job = EvalJob {
             len,
             mode: closure.transport(),
-            directions: Directions::Unit,
+            // With a sampled lobe to skip, `wi` is that sample's.
+            directions: if skip.is_some() {
+                Directions::Sampled
+            } else {
+                Directions::Unit
+            },
             wo: view3(wo, len),
             wi: view3(wi, len),
             lobe: lanes,
@@ -1025,7 +1030,7 @@ fn mixture_in_place(
         let mut job = EvalJob {
             len: n,
             mode: closure.transport(),
-            directions: Directions::Unit,
+            directions: Directions::Sampled,
             wo: view3(&s.wo, n),
             wi: view3(&s.wi, n),
             lobe: uniform_lobe(closure, k),

@@ -533,6 +533,10 @@ impl Closure {
             return Err(no_sample());
         }
         let wi = s.wi;
+        // The other lobes see `wi` as an eval given it sees it, normalized once more
+        // (the chosen lobe's value is settled there): a narrow lobe turns that last
+        // bit into a relative 1e-4 at alpha 0.001.
+        let wi_eval = wi.normalize();
         let own = (l.weight * s.value, s.pdf);
         let (value, pdf) = match mixture {
             // Summed in lobe order, as `eval` sums them.
@@ -541,7 +545,7 @@ impl Closure {
                     let (v, q) = if j == k {
                         own
                     } else {
-                        self.eval_one(j, wo, wi)
+                        self.eval_one(j, wo, wi_eval)
                     };
                     (value + v, pdf + self.lobes[j].probability * q)
                 })

@@ -63,6 +63,21 @@ pub enum Directions {
     /// is outside it (or not finite). Such a job's outputs are not valid: the batch
     /// layer computes its lanes again through staging, which handles every length.
     Raw,
+    /// Unit `wo`; `wi` a direction a sample returned, normalized once more as an eval
+    /// given it back would normalize it (the sampled lobe's value is settled there, and
+    /// a narrow lobe turns that last bit into a relative 1e-4 at alpha 0.001).
+    Sampled,
+}
+
+impl Directions {
+    /// How `wo` arrives in a job whose directions are `self`.
+    #[inline(always)]
+    fn of_wo(self) -> Directions {
+        match self {
+            Directions::Sampled => Directions::Unit,
+            d => d,
+        }
+    }
 }
 
 /// Inputs of an eval or pdf job.
@@ -359,6 +374,7 @@ fn direction<L: Lane>(
     let d = load3(rows, i, n);
     match directions {
         Directions::Unit => d,
+        Directions::Sampled => d.normalize(),
         Directions::Raw => {
             let (unit, ok) = unit_in_range(d);
             *out_of_range |= !ok.all();
@@ -445,7 +461,13 @@ fn for_each_register<M: Model, L: Lane>(
 impl<M: Model, L: Lane> RegisterOp<M, L> for EvalJob<'_> {
     #[inline(always)]
     fn run(&mut self, i: usize, n: usize, p: &M::Prepared<L>, lanes: &LaneLobe<L>) {
-        let wo = direction(self.wo, i, n, self.directions, &mut self.out_of_range);
+        let wo = direction(
+            self.wo,
+            i,
+            n,
+            self.directions.of_wo(),
+            &mut self.out_of_range,
+        );
         let wi = direction(self.wi, i, n, self.directions, &mut self.out_of_range);
         let e = M::eval(
             p,
@@ -713,12 +735,17 @@ pub fn eval_each_lane(
     job: &mut EvalJob<'_>,
     eval: impl Fn(&[f32], Vec3<f32>, Vec3<f32>, Transport) -> crate::lobes::Eval<f32>,
 ) {
-    debug_assert!(job.directions == Directions::Unit && job.except.is_none());
+    debug_assert!(job.directions != Directions::Raw && job.except.is_none());
     let mut params = Vec::new();
     for i in 0..job.len {
         let (frame, weight, probability) = job.lobe.lane(i, &mut params);
         let wo = frame.to_local(lane_vec(job.wo, i));
-        let wi = frame.to_local(lane_vec(job.wi, i));
+        let wi = lane_vec(job.wi, i);
+        let wi = frame.to_local(if job.directions == Directions::Sampled {
+            wi.normalize()
+        } else {
+            wi
+        });
         let e = eval(&params, wo, wi, job.mode);
         let overwrite = job.store;
         let put = |out: &mut f32, v: f32| *out = if overwrite { v } else { *out + v };

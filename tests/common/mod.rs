@@ -40,6 +40,11 @@ impl Block {
             .unwrap_or_else(|| panic!("no parameter named {name}"))
     }
 
+    /// Whether the schema has a parameter `name`.
+    pub fn has(&self, name: &str) -> bool {
+        self.specs.iter().any(|s| s.name == name)
+    }
+
     /// Offset of parameter `name` in the block.
     pub fn offset(&self, name: &str) -> usize {
         offset_of(self.specs, self.index(name))
