@@ -3,9 +3,10 @@
 # Sourced by scripts/run.sh and scripts/test.sh.
 set -euo pipefail
 
+# binutils: nm for tests/simd_inlining.rs.
 # libembree-dev, libopenimageio-dev, libassimp-dev, libcjson-dev: the example hosts
 # (Embree 3 geometry, EXR/PNG output, meshes and scene files).
-packages=(cmake pkg-config gcc g++ make libcmocka-dev
+packages=(cmake pkg-config gcc g++ make binutils libcmocka-dev
           libembree-dev libopenimageio-dev libassimp-dev libcjson-dev)
 missing=()
 for p in "${packages[@]}"; do

@@ -283,8 +283,10 @@ impl ClearcoatTable {
         let (ig, fg) = grid(gloss, NG);
         let c: [(L, L); 4] = corners(L::zero(), [(im, fm, 1), (ig, fg, NM)]);
         let values = Self::values();
-        c.iter().fold(L::zero(), |sum, &(cell, w)| {
-            w.mul_add(L::gather(values, cell), sum)
-        })
+        let mut sum = L::zero();
+        for (cell, w) in c {
+            sum = w.mul_add(L::gather(values, cell), sum);
+        }
+        sum
     }
 }

@@ -210,18 +210,20 @@ pub(super) fn corners<L: Lane, const A: usize, const C: usize>(
     for (i, _, stride) in axes {
         origin += i * L::splat(stride as f32);
     }
-    std::array::from_fn(|corner| {
-        let (mut index, mut weight) = (origin, L::one());
+    // A loop, not `array::from_fn`: its closure would be a function without the
+    // kernel's target features (tests/simd_inlining.rs).
+    let mut out = [(origin, L::one()); C];
+    for (corner, (index, weight)) in out.iter_mut().enumerate() {
         for (bit, (_, f, stride)) in axes.iter().enumerate() {
             if corner >> bit & 1 == 1 {
-                index += L::splat(*stride as f32);
-                weight *= *f;
+                *index += L::splat(*stride as f32);
+                *weight *= *f;
             } else {
-                weight *= L::one() - *f;
+                *weight *= L::one() - *f;
             }
         }
-        (index, weight)
-    })
+    }
+    out
 }
 
 /// `sum_corners weight value(corner, k)` for each of the `K` channels of `table`.
@@ -308,7 +310,11 @@ impl ReflectionTable {
                 ],
             ),
         );
-        std::array::from_fn(|k| L::select(anisotropic, aniso[k], iso[k]))
+        let mut h = iso;
+        for (h, a) in h.iter_mut().zip(aniso) {
+            *h = L::select(anisotropic, a, *h);
+        }
+        h
     }
 
     /// The single-scattering albedo `E[F(wo.m) G2/G1]` of a reflection lobe, for `wo`
@@ -381,7 +387,11 @@ impl<L: Lane> FresnelNodes<L> {
 
     #[inline(always)]
     pub fn of_conductor(eta: Rgb<L>, k: Rgb<L>) -> Self {
-        let cos = FRESNEL_CURVE_COS.map(L::splat);
+        // A loop, not `array::map` (tests/simd_inlining.rs).
+        let mut cos = [L::zero(); FRESNEL_CURVE_COS.len()];
+        for (c, &x) in cos.iter_mut().zip(&FRESNEL_CURVE_COS) {
+            *c = L::splat(x);
+        }
         let curve = |eta: L, k: L| fresnel::conductor_at(cos, &fresnel::ConductorIor::new(eta, k));
         Self::from_curve([curve(eta.r, k.r), curve(eta.g, k.g), curve(eta.b, k.b)])
     }

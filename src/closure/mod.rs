@@ -670,8 +670,6 @@ fn same_lobe_type(a: &LobeInstance, b: &LobeInstance) -> bool {
         && std::ptr::addr_eq(&*a.lobe as *const dyn crate::lobes::LobeType, &*b.lobe)
 }
 
-/// Selection probabilities proportional to `shares` (finite, >= 0, not all 0). The
-/// shares are divided by the largest first, so their sum cannot overflow.
 /// Selection probabilities of lobes whose `luminance(weight * albedo(wo))` are `shares`
 /// (one per lobe): proportional to them; a single lobe is chosen with probability 1;
 /// without any reflecting lobe, proportional to `weight_luminance(k)`, then uniform.
@@ -696,6 +694,8 @@ pub(crate) fn selection(
     normalize_shares(&s[..n])
 }
 
+/// Probabilities proportional to `shares` (finite, >= 0, not all 0). The shares are
+/// divided by the largest first, so their sum cannot overflow.
 fn normalize_shares(shares: &[f32]) -> [f32; MAX_LOBES] {
     let largest = shares.iter().fold(0.0f32, |m, &s| m.max(s));
     let mut p = [0.0f32; MAX_LOBES];

@@ -615,7 +615,7 @@ unsafe fn material_lanes<'a>(
         if l.override_count > 0 {
             let given = input(l.overrides, l.override_count, "overrides")?;
             for (i, o) in given.iter().enumerate() {
-                let kind = super::material::param_kind(o.param_type, &format!("overrides[{i}]"))?;
+                let kind = super::material::param_kind(o.param_type, i)?;
                 // The schema first: a wrong index or type names itself, not its arrays.
                 material.override_spec(i, o.param, kind)?;
                 let mut value: [&[f32]; 3] = [&[]; 3];

@@ -119,8 +119,9 @@ pub struct glint_override {
     pub value: [f32; 3],
 }
 
-/// `GLINT_PARAM_*` as a parameter kind.
-pub(crate) fn param_kind(param_type: u32, what: &str) -> Result<ParamKind, Error> {
+/// The kind `overrides[i].param_type` names (the message is only formatted on error:
+/// this runs per shading point).
+pub(crate) fn param_kind(param_type: u32, i: usize) -> Result<ParamKind, Error> {
     match param_type {
         GLINT_PARAM_FLOAT => Ok(ParamKind::Float),
         GLINT_PARAM_RGB => Ok(ParamKind::Rgb),
@@ -128,7 +129,7 @@ pub(crate) fn param_kind(param_type: u32, what: &str) -> Result<ParamKind, Error
         t => Err(Error::new(
             Status::InvalidArgument,
             format!(
-                "{what}: param_type {t} is not GLINT_PARAM_FLOAT, GLINT_PARAM_RGB or GLINT_PARAM_ENUM"
+                "overrides[{i}]: param_type {t} is not GLINT_PARAM_FLOAT, GLINT_PARAM_RGB or GLINT_PARAM_ENUM"
             ),
         )),
     }
@@ -215,7 +216,7 @@ pub(crate) unsafe fn overrides_in(
     for (i, (o, out)) in given.iter().zip(out.iter_mut()).enumerate() {
         *out = Override {
             param: o.param,
-            kind: param_kind(o.param_type, &format!("override {i}"))?,
+            kind: param_kind(o.param_type, i)?,
             value: o.value,
         };
     }

@@ -287,12 +287,14 @@ impl Model for DisneyDiffuse {
         }
         // (1 - mu)^5 = sum_i C(5, i) (-1)^i mu^i.
         let binomial = [1.0, -5.0, 10.0, -10.0, 5.0, -1.0];
-        let u_recurrence = [1, 2, 3].map(|k| {
-            binomial
-                .iter()
-                .enumerate()
-                .fold(L::zero(), |s, (i, &c)| s + L::splat(c) * j[k + i])
-        });
+        // Plain loops, here and below: a closure is a function without the kernel's
+        // target features (tests/simd_inlining.rs).
+        let mut u_recurrence = [L::zero(); 3];
+        for (k, u) in u_recurrence.iter_mut().enumerate() {
+            for (i, &c) in binomial.iter().enumerate() {
+                *u += L::splat(c) * j[k + 1 + i];
+            }
+        }
         let mut u_quad = [L::zero(); 3];
         for (&mu, &w) in QUAD_NODES.iter().zip(&QUAD_WEIGHTS) {
             let mu = L::splat(mu);
@@ -302,7 +304,10 @@ impl Model for DisneyDiffuse {
             u_quad[2] += w1 * mu * mu;
         }
         let quad = a.ge(L::splat(QUAD_MIN_COS));
-        let u_w = [0, 1, 2].map(|k| L::select(quad, u_quad[k], u_recurrence[k]));
+        let mut u_w = u_recurrence;
+        for (u, q) in u_w.iter_mut().zip(u_quad) {
+            *u = L::select(quad, q, *u);
+        }
         let (k0, k1) = (r * half - L::one(), r * half);
         let s_w = fresnel_pair_moment(k0, k1, a, fv, [j[1], j[2]], u_w);
         let s_1 = fresnel_pair_moment(k0, k1, a, fv, t_poly, u_poly);

@@ -141,10 +141,11 @@ impl Model for DisneySheen {
     #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
         let x = L::one() - wo.z.clamp(L::zero(), L::one());
-        let s = ALBEDO_FIT
-            .iter()
-            .rev()
-            .fold(L::zero(), |acc, &c| acc * x + L::splat(c));
+        // Horner, as a loop: a closure would lose the kernel's target features.
+        let mut s = L::zero();
+        for &c in ALBEDO_FIT.iter().rev() {
+            s = s * x + L::splat(c);
+        }
         Rgb::select(wo.z.gt(L::zero()), p.color * s, Rgb::zero())
     }
 }

@@ -1,0 +1,222 @@
+//! Material batches against a batch over one prebuilt closure of the same material
+//! (issue 14's target: at least half the prebuilt closure's lane rate, expansion
+//! included). The `disney` material with every lobe on (the parameters of
+//! scripts/bench_vs_mitsuba.py's `principled` case); the material batch gets per-lane
+//! `wo`, a normal and two overrides per lane (base color and roughness, as a textured
+//! host passes), the prebuilt closure only `wo`. On the calling thread, at 4096 and
+//! 65536 lanes. Run: `cargo bench --bench material`.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use glint::batch::material::{self, MaterialInput, OverrideLanes};
+use glint::batch::{
+    self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, Threads,
+};
+use glint::materials::{Material, ShadingContext};
+use glint::math::{Frame, Vec3};
+use glint::params::ParamKind;
+use glint::registry::Registry;
+use glint::simd::Kernels;
+use std::hint::black_box;
+use std::time::Duration;
+
+const SIZES: [usize; 2] = [4096, 1 << 16];
+
+const DISNEY: &str = r#"{"material": "disney", "base_color": [0.8, 0.2, 0.1],
+    "metallic": 0.3, "roughness": 0.5, "anisotropic": 0.4, "sheen": 1, "subsurface": 0.5,
+    "clearcoat": 1, "clearcoat_gloss": 0.8, "specular": 0.5}"#;
+
+/// SoA inputs and outputs for `n` lanes.
+struct Lanes {
+    wo: [Vec<f32>; 3],
+    wi: [Vec<f32>; 3],
+    normal: [Vec<f32>; 3],
+    u: [Vec<f32>; 3],
+    base_color: [Vec<f32>; 3],
+    roughness: Vec<f32>,
+    value: [Vec<f32>; 3],
+    pdf: Vec<f32>,
+    s_wi: [Vec<f32>; 3],
+    weight: [Vec<f32>; 3],
+}
+
+impl Lanes {
+    fn new(n: usize) -> Lanes {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut dir = || {
+            let z = next().max(0.01);
+            let phi = 2.0 * std::f32::consts::PI * next();
+            let r = (1.0 - z * z).sqrt();
+            [r * phi.cos(), r * phi.sin(), z]
+        };
+        let mut wo: [Vec<f32>; 3] = Default::default();
+        let mut wi: [Vec<f32>; 3] = Default::default();
+        for _ in 0..n {
+            for (rows, d) in [(&mut wo, dir()), (&mut wi, dir())] {
+                for c in 0..3 {
+                    rows[c].push(d[c]);
+                }
+            }
+        }
+        let zeros = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        Lanes {
+            wo,
+            wi,
+            normal: [vec![0.0; n], vec![0.0; n], vec![1.0; n]],
+            u: [0, 1, 2].map(|_| (0..n).map(|_| next()).collect()),
+            base_color: [0, 1, 2].map(|c| {
+                (0..n)
+                    .map(|_| 0.1 + 0.2 * c as f32 + 0.5 * next())
+                    .collect()
+            }),
+            roughness: (0..n).map(|_| 0.3 + 0.4 * next()).collect(),
+            value: zeros(),
+            pdf: vec![0.0; n],
+            s_wi: zeros(),
+            weight: zeros(),
+        }
+    }
+}
+
+fn soa(v: &[Vec<f32>; 3]) -> Soa3<'_> {
+    Soa3 {
+        x: &v[0],
+        y: &v[1],
+        z: &v[2],
+    }
+}
+
+fn soa_mut(v: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
+    let [x, y, z] = v;
+    Soa3Mut { x, y, z }
+}
+
+fn sample_output(l: &mut Lanes) -> (SampleRandoms<'_>, SampleOutput<'_>) {
+    (
+        SampleRandoms {
+            u_lobe: &l.u[0],
+            u0: &l.u[1],
+            u1: &l.u[2],
+        },
+        SampleOutput {
+            wi: soa_mut(&mut l.s_wi),
+            pdf: &mut l.pdf,
+            weight: soa_mut(&mut l.weight),
+            value: None,
+            flags: None,
+            lobe: None,
+            eta: None,
+            roughness: None,
+        },
+    )
+}
+
+/// `eval` or `sample` of the material batch over `l`.
+fn run_material(exec: &Exec<'_>, m: &Material, l: &mut Lanes, sample: bool) {
+    let (base_color, roughness) = (
+        std::mem::take(&mut l.base_color),
+        std::mem::take(&mut l.roughness),
+    );
+    let overrides = [
+        OverrideLanes {
+            param: 0,
+            kind: ParamKind::Rgb,
+            value: [&base_color[0], &base_color[1], &base_color[2]],
+        },
+        OverrideLanes {
+            param: 5,
+            kind: ParamKind::Float,
+            value: [&roughness, &[], &[]],
+        },
+    ];
+    let (wo, normal) = (std::mem::take(&mut l.wo), std::mem::take(&mut l.normal));
+    let input = MaterialInput {
+        count: l.pdf.len(),
+        material: m,
+        active: None,
+        wo: soa(&wo),
+        normal: soa(&normal),
+        tangent: None,
+        overrides: &overrides,
+    };
+    if sample {
+        let (u, out) = sample_output(l);
+        material::sample(exec, &input, u, out).expect("valid batch");
+    } else {
+        let out = EvalOutput {
+            value: soa_mut(&mut l.value),
+            pdf: &mut l.pdf,
+            pdf_reverse: None,
+        };
+        material::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
+    }
+    (l.wo, l.normal, l.base_color, l.roughness) = (wo, normal, base_color, roughness);
+}
+
+/// `eval` or `sample` of one prebuilt closure shared by every lane of `l`.
+fn run_closure(exec: &Exec<'_>, c: &glint::Closure, l: &mut Lanes, sample: bool) {
+    let wo = std::mem::take(&mut l.wo);
+    let input = BatchInput {
+        count: l.pdf.len(),
+        closures: c,
+        active: None,
+        wo: soa(&wo),
+    };
+    if sample {
+        let (u, out) = sample_output(l);
+        batch::sample(exec, &input, u, out).expect("valid batch");
+    } else {
+        let out = EvalOutput {
+            value: soa_mut(&mut l.value),
+            pdf: &mut l.pdf,
+            pdf_reverse: None,
+        };
+        batch::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
+    }
+    l.wo = wo;
+}
+
+fn materials(c: &mut Criterion) {
+    let registry = Registry::with_builtins();
+    let m = glint::json::material_from_json(&registry, DISNEY, 0.0).expect("valid material");
+    let wo = Vec3::new(0.3f32, 0.2, 0.93).normalize();
+    let prebuilt = m
+        .closure(&ShadingContext::new(wo, Frame::IDENTITY), &[])
+        .expect("closure");
+    let mut lanes: Vec<Lanes> = SIZES.iter().map(|&n| Lanes::new(n)).collect();
+    for kernels in Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Caller,
+        };
+        let mut group = c.benchmark_group(format!("disney/{}", kernels.isa().name()));
+        for l in lanes.iter_mut() {
+            let n = l.pdf.len();
+            group.throughput(Throughput::Elements(n as u64));
+            for (what, sample) in [("eval", false), ("sample", true)] {
+                group.bench_function(BenchmarkId::new(format!("material_{what}"), n), |b| {
+                    b.iter(|| run_material(&exec, &m, black_box(l), sample))
+                });
+                group.bench_function(BenchmarkId::new(format!("closure_{what}"), n), |b| {
+                    b.iter(|| run_closure(&exec, &prebuilt, black_box(l), sample))
+                });
+            }
+        }
+        group.finish();
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    targets = materials
+}
+criterion_main!(benches);
