@@ -4,11 +4,12 @@
 //! memory-bandwidth bound of a 1M eval (a streaming pass that reads and writes the
 //! same bytes). Run: `cargo bench --bench batch`, then `scripts/bench_report.py`.
 
+mod common;
+
+use common::{Uniform, soa, soa_mut, zeros};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glint::Closure;
-use glint::batch::{
-    self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, Threads,
-};
+use glint::batch::{self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads};
 use glint::lobes::Transport;
 use glint::math::Frame;
 use glint::registry::Registry;
@@ -31,52 +32,27 @@ struct Lanes {
 
 impl Lanes {
     fn new(n: usize) -> Lanes {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
-        let mut dir = || {
-            let z = next().max(0.01);
-            let phi = 2.0 * std::f32::consts::PI * next();
-            let r = (1.0 - z * z).sqrt();
-            [r * phi.cos(), r * phi.sin(), z]
-        };
-        let mut wo: [Vec<f32>; 3] = Default::default();
-        let mut wi: [Vec<f32>; 3] = Default::default();
+        // wo and wi interleaved, as they were drawn before.
+        let mut u = Uniform::new();
+        let (mut wo, mut wi): ([Vec<f32>; 3], [Vec<f32>; 3]) = Default::default();
         for _ in 0..n {
-            for (rows, d) in [(&mut wo, dir()), (&mut wi, dir())] {
+            for rows in [&mut wo, &mut wi] {
+                let d = u.direction();
                 for c in 0..3 {
                     rows[c].push(d[c]);
                 }
             }
         }
-        let zeros = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
         Lanes {
             wo,
             wi,
-            u: [0, 1, 2].map(|_| (0..n).map(|_| next()).collect()),
-            value: zeros(),
+            u: [0, 1, 2].map(|_| u.row(n)),
+            value: zeros(n),
             pdf: vec![0.0; n],
-            s_wi: zeros(),
-            weight: zeros(),
+            s_wi: zeros(n),
+            weight: zeros(n),
         }
     }
-}
-
-fn soa(v: &[Vec<f32>; 3]) -> Soa3<'_> {
-    Soa3 {
-        x: &v[0],
-        y: &v[1],
-        z: &v[2],
-    }
-}
-
-fn soa_mut(v: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
-    let [x, y, z] = v;
-    Soa3Mut { x, y, z }
 }
 
 fn eval(exec: &Exec<'_>, closure: &Closure, l: &mut Lanes) {

@@ -6,11 +6,12 @@
 //! host passes), the prebuilt closure only `wo`. On the calling thread, at 4096 and
 //! 65536 lanes. Run: `cargo bench --bench material`.
 
+mod common;
+
+use common::{Uniform, soa, soa_mut, zeros};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glint::batch::material::{self, MaterialInput, OverrideLanes};
-use glint::batch::{
-    self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, Threads,
-};
+use glint::batch::{self, BatchInput, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads};
 use glint::materials::{Material, ShadingContext};
 use glint::math::{Frame, Vec3};
 use glint::params::ParamKind;
@@ -41,59 +42,25 @@ struct Lanes {
 
 impl Lanes {
     fn new(n: usize) -> Lanes {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
-        let mut dir = || {
-            let z = next().max(0.01);
-            let phi = 2.0 * std::f32::consts::PI * next();
-            let r = (1.0 - z * z).sqrt();
-            [r * phi.cos(), r * phi.sin(), z]
-        };
-        let mut wo: [Vec<f32>; 3] = Default::default();
-        let mut wi: [Vec<f32>; 3] = Default::default();
-        for _ in 0..n {
-            for (rows, d) in [(&mut wo, dir()), (&mut wi, dir())] {
-                for c in 0..3 {
-                    rows[c].push(d[c]);
-                }
-            }
-        }
-        let zeros = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        let mut u = Uniform::new();
         Lanes {
-            wo,
-            wi,
+            wo: u.directions(n),
+            wi: u.directions(n),
             normal: [vec![0.0; n], vec![0.0; n], vec![1.0; n]],
-            u: [0, 1, 2].map(|_| (0..n).map(|_| next()).collect()),
+            u: [0, 1, 2].map(|_| u.row(n)),
             base_color: [0, 1, 2].map(|c| {
-                (0..n)
-                    .map(|_| 0.1 + 0.2 * c as f32 + 0.5 * next())
+                u.row(n)
+                    .iter()
+                    .map(|x| 0.1 + 0.2 * c as f32 + 0.5 * x)
                     .collect()
             }),
-            roughness: (0..n).map(|_| 0.3 + 0.4 * next()).collect(),
-            value: zeros(),
+            roughness: u.row(n).iter().map(|x| 0.3 + 0.4 * x).collect(),
+            value: zeros(n),
             pdf: vec![0.0; n],
-            s_wi: zeros(),
-            weight: zeros(),
+            s_wi: zeros(n),
+            weight: zeros(n),
         }
     }
-}
-
-fn soa(v: &[Vec<f32>; 3]) -> Soa3<'_> {
-    Soa3 {
-        x: &v[0],
-        y: &v[1],
-        z: &v[2],
-    }
-}
-
-fn soa_mut(v: &mut [Vec<f32>; 3]) -> Soa3Mut<'_> {
-    let [x, y, z] = v;
-    Soa3Mut { x, y, z }
 }
 
 fn sample_output(l: &mut Lanes) -> (SampleRandoms<'_>, SampleOutput<'_>) {
