@@ -18,10 +18,11 @@ use super::{
 };
 use crate::closure::{MAX_LOBES, SampleResult, selection};
 use crate::error::{Error, Status};
+use crate::kernels::expand::ExpandJob;
 use crate::kernels::{AlbedoJob, Directions, EvalJob, LobeLanes, SampleJob, mixture};
 use crate::lobes::Transport;
 use crate::materials::compiled::MAX_MATERIAL_PARAMS;
-use crate::materials::{Context, MAX_SLOTS, Material};
+use crate::materials::{MAX_SLOT_PARAMS, MAX_SLOTS, Material};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params::{self, ParamKind};
 use crate::simd::Kernels;
@@ -95,11 +96,21 @@ impl MaterialInput<'_> {
 /// Per-slot rows of a chunk.
 #[derive(Default)]
 pub(super) struct SlotRows {
+    /// Each lane's material block (overrides applied): value `p` of lane `j` at
+    /// `p * len + j`.
+    input: Vec<f32>,
+    /// `wo` in each lane's shading frame.
+    local_wo: [Vec<f32>; 3],
+    /// The blocks `expand` writes: slot `k`'s value `p` of lane `j` at
+    /// `(k * MAX_SLOT_PARAMS + p) * len + j`.
+    raw: Vec<f32>,
     /// Decoded blocks: slot `k`'s value `p` of lane `j` at `(k * MAX_PARAMS + p) * len + j`.
     params: Vec<f32>,
     weight: Vec<f32>,
     probability: Vec<f32>,
     frame: Vec<f32>,
+    /// Each slot's `luminance(weight * albedo(wo))`: slot `k`'s of lane `j` at `k * len + j`.
+    shares: Vec<f32>,
     /// Whether any lane emits the slot.
     live: [bool; MAX_SLOTS],
 }
@@ -108,10 +119,16 @@ pub(super) struct SlotRows {
 const MAX_PARAMS: usize = crate::lobes::MAX_DECODED_LEN;
 
 impl SlotRows {
-    fn reserve(&mut self, len: usize) -> Result<(), Error> {
+    fn reserve(&mut self, len: usize, block_len: usize) -> Result<(), Error> {
+        super::stage::reserve(&mut self.input, block_len * len)?;
+        for row in &mut self.local_wo {
+            super::stage::reserve(row, len)?;
+        }
+        super::stage::reserve(&mut self.raw, MAX_SLOTS * MAX_SLOT_PARAMS * len)?;
         super::stage::reserve(&mut self.params, MAX_SLOTS * MAX_PARAMS * len)?;
         super::stage::reserve(&mut self.weight, MAX_SLOTS * 3 * len)?;
         super::stage::reserve(&mut self.probability, MAX_SLOTS * len)?;
+        super::stage::reserve(&mut self.shares, MAX_SLOTS * len)?;
         super::stage::reserve(&mut self.frame, 9 * len)
     }
 
@@ -147,10 +164,10 @@ impl Failure {
     }
 }
 
-/// Stage the chunk's lanes `lanes` (`len` padded): unit `wo` into `s.wo`, frames,
-/// expanded and decoded slot blocks, weights; then each slot's albedo prunes it and
-/// sets the selection probabilities. Lanes with invalid inputs are flagged in
-/// `s.failed`.
+/// Stage the chunk's lanes `lanes` (`len` padded): unit `wo` into `s.wo`, frames and
+/// per-lane material blocks; then the expansion in SIMD, each slot's blocks decoded,
+/// and each slot's albedo prunes it and sets the selection probabilities. Lanes with
+/// invalid inputs are flagged in `s.failed`.
 fn stage_chunk(
     kernels: Kernels,
     input: &MaterialInput<'_>,
@@ -161,23 +178,20 @@ fn stage_chunk(
 ) -> Result<(), Error> {
     let material = input.material;
     let slots = material.slots();
-    let kind = material.kind();
     let block_len = material.params().len();
     s.reserve_rows(len)?;
     super::stage::reserve(&mut s.failed, len)?;
-    s.material.reserve(len)?;
+    s.material.reserve(len, block_len)?;
     let failed = grow(&mut s.failed, len);
     failed.fill(0);
     s.any_failed = false;
     let rows = &mut s.material;
-    let params = grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len);
-    let weight = grow(&mut rows.weight, MAX_SLOTS * 3 * len);
+    let blocks = grow(&mut rows.input, block_len * len);
     let frame_rows = grow(&mut rows.frame, 9 * len);
-    let wo_rows = rows3(&mut s.wo, len);
-    let [wo_x, wo_y, wo_z] = wo_rows;
+    let [wo_x, wo_y, wo_z] = rows3(&mut s.wo, len);
+    let [lo_x, lo_y, lo_z] = rows3(&mut rows.local_wo, len);
     let n = lanes.len();
     let mut block = [0.0f32; MAX_MATERIAL_PARAMS];
-    let mut decoded = [0.0f32; MAX_PARAMS];
     for j in 0..len {
         let lane = lanes[j.min(n - 1)] as usize;
         let (wo, frame) = lane_inputs(input, lane, &mut block[..block_len]).unwrap_or_else(|e| {
@@ -191,28 +205,48 @@ fn stage_chunk(
             (Vec3::new(0.0, 0.0, 1.0), Frame::IDENTITY)
         });
         (wo_x[j], wo_y[j], wo_z[j]) = (wo.x, wo.y, wo.z);
+        let local = frame.to_local(wo);
+        (lo_x[j], lo_y[j], lo_z[j]) = (local.x, local.y, local.z);
         for (a, axis) in [frame.t, frame.b, frame.n].iter().enumerate() {
             frame_rows[3 * a * len + j] = axis.x;
             frame_rows[(3 * a + 1) * len + j] = axis.y;
             frame_rows[(3 * a + 2) * len + j] = axis.z;
         }
-        let ctx = Context {
-            wo: frame.to_local(wo),
-            position: Vec3::new(0.0, 0.0, 0.0),
-            reference_position: Vec3::new(0.0, 0.0, 0.0),
-            footprint: 0.0,
-            uv: [0.0; 2],
-        };
-        let e = kind.expand(&block[..block_len], &ctx);
-        for (k, (_, lobe)) in slots.iter().enumerate() {
-            let raw = &e.params[k][..params::block_size(lobe.params())];
-            let d = &mut decoded[..lobe.decoded_len()];
-            lobe.decode(raw, d);
-            for (p, &v) in d.iter().enumerate() {
-                params[(k * MAX_PARAMS + p) * len + j] = v;
+        for (p, &v) in block[..block_len].iter().enumerate() {
+            blocks[p * len + j] = v;
+        }
+    }
+    let mut block_lens = [0; MAX_SLOTS];
+    for (b, (_, lobe)) in block_lens.iter_mut().zip(slots) {
+        *b = params::block_size(lobe.params());
+    }
+    material.kind().expand_lanes(
+        kernels,
+        &mut ExpandJob {
+            len,
+            params: &rows.input[..block_len * len],
+            param_count: block_len,
+            wo: view3(&rows.local_wo, len),
+            block_len: block_lens,
+            weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
+            blocks: grow(&mut rows.raw, MAX_SLOTS * MAX_SLOT_PARAMS * len),
+        },
+    );
+    let params = grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len);
+    let mut raw = [0.0f32; MAX_SLOT_PARAMS];
+    let mut decoded = [0.0f32; MAX_PARAMS];
+    for (k, (_, lobe)) in slots.iter().enumerate() {
+        let (raw, decoded) = (
+            &mut raw[..block_lens[k]],
+            &mut decoded[..lobe.decoded_len()],
+        );
+        for j in 0..len {
+            for (p, r) in raw.iter_mut().enumerate() {
+                *r = rows.raw[(k * MAX_SLOT_PARAMS + p) * len + j];
             }
-            for (c, w) in e.weight[k].to_array().into_iter().enumerate() {
-                weight[(k * 3 + c) * len + j] = w;
+            lobe.decode(raw, decoded);
+            for (p, &v) in decoded.iter().enumerate() {
+                params[(k * MAX_PARAMS + p) * len + j] = v;
             }
         }
     }
@@ -258,8 +292,10 @@ fn lane_inputs(
 /// then per lane the closure's pruning and selection rules.
 fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> Result<(), Error> {
     let slots = material.slots();
-    let mut shares = vec![0.0f32; slots.len() * len];
     let rows = &mut s.material;
+    // Out of the rows while the kernels read them, put back at the end.
+    let mut share_rows = std::mem::take(&mut rows.shares);
+    let shares = grow(&mut share_rows, slots.len() * len);
     grow(&mut rows.probability, MAX_SLOTS * len).fill(1.0);
     for (k, (_, lobe)) in slots.iter().enumerate() {
         let w = &rows.weight[k * 3 * len..(k + 1) * 3 * len];
@@ -341,6 +377,7 @@ fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> 
             .iter()
             .any(|&p| p > 0.0);
     }
+    rows.shares = share_rows;
     Ok(())
 }
 

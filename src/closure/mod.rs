@@ -697,13 +697,15 @@ pub(crate) fn selection(
 /// Probabilities proportional to `shares` (finite, >= 0, not all 0). The shares are
 /// divided by the largest first, so their sum cannot overflow.
 fn normalize_shares(shares: &[f32]) -> [f32; MAX_LOBES] {
+    let n = shares.len();
     let largest = shares.iter().fold(0.0f32, |m, &s| m.max(s));
     let mut p = [0.0f32; MAX_LOBES];
     for (p, &s) in p.iter_mut().zip(shares) {
         *p = s / largest;
     }
-    let total: f32 = p.iter().sum();
-    for p in &mut p {
+    // Over the lobes only: the zeros after them would not change the sum.
+    let total: f32 = p[..n].iter().sum();
+    for p in &mut p[..n] {
         *p /= total;
     }
     p

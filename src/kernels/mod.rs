@@ -11,6 +11,7 @@
 //! job when every lane shares the closure, once per register otherwise. The closure
 //! mixture over lanes (lobe choice, the sample's weight and flags) is in [`mixture`].
 
+pub mod expand;
 pub mod mixture;
 
 use crate::albedo_table::FRESNEL_CURVE_COS;

@@ -20,9 +20,11 @@ pub mod disney;
 
 pub use compiled::{Material, Override};
 
+use crate::kernels::expand::ExpandJob;
 use crate::lobes::{Params, VerifyCase};
 use crate::math::{Frame, Lane, Rgb, Vec3};
 use crate::params::ParamSpec;
+use crate::simd::Kernels;
 use std::marker::PhantomData;
 
 /// Most lobes one material emits.
@@ -99,6 +101,7 @@ pub struct Expansion<L> {
 }
 
 impl<L: Lane> Default for Expansion<L> {
+    #[inline(always)]
     fn default() -> Self {
         Expansion {
             weight: [Rgb::zero(); MAX_SLOTS],
@@ -132,6 +135,8 @@ pub trait MaterialType: Send + Sync {
     fn lobes(&self) -> &[&'static str];
     fn verify_cases(&self) -> &[VerifyCase];
     fn expand(&self, params: &[f32], ctx: &Context<f32>) -> Expansion<f32>;
+    /// `expand` over staged lanes, in SIMD (material batches).
+    fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>);
 }
 
 /// The [`MaterialType`] of a built-in [`MaterialModel`].
@@ -169,6 +174,9 @@ impl<M: MaterialModel> MaterialType for BuiltinMaterial<M> {
         let mut out = Expansion::default();
         M::expand(Params::new(params), ctx, &mut out);
         out
+    }
+    fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>) {
+        crate::kernels::expand::expand::<M>(kernels, job);
     }
 }
 
