@@ -678,10 +678,13 @@ pub(crate) fn selection(
     weight_luminance: impl Fn(usize) -> f32,
 ) -> [f32; MAX_LOBES] {
     let n = shares.len();
-    let mut s: [f32; MAX_LOBES] =
-        std::array::from_fn(|k| shares.get(k).map_or(0.0, |s| s.max(0.0)));
+    let mut s = [0.0f32; MAX_LOBES];
     if n == 1 {
         s[0] = 1.0;
+        return s;
+    }
+    for (s, &share) in s.iter_mut().zip(shares) {
+        *s = share.max(0.0);
     }
     if s[..n].iter().sum::<f32>() <= 0.0 {
         for (k, s) in s[..n].iter_mut().enumerate() {
