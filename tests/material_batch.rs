@@ -117,3 +117,145 @@ fn samples_carry_the_eval_at_their_direction() {
     assert!(compared > 2000, "{compared} samples compared");
     assert!(worst < 5e-7, "sample vs eval at the returned wi: {worst:e}");
 }
+
+/// A hostile batch: lanes with a NaN normal, a zero-length tangent, a NaN and an
+/// out-of-range override each get zero outputs, the lowest such lane's first error
+/// (in the order a single shading point checks: wo, normal, tangent, overrides) is
+/// reported, and every other lane equals the closure `Material::closure` builds for
+/// it, given tangents and automatic ones mixed.
+#[test]
+fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
+    use glint::materials::Override;
+    use glint::math::Frame;
+    use glint::params::ParamKind;
+    let registry = Registry::with_builtins();
+    let description = r#"{"material": "disney", "metallic": 0.4, "clearcoat": 0.7,
+        "sheen": 0.5, "anisotropic": 0.6, "subsurface": 0.3}"#;
+    let material = glint::json::material_from_json(&registry, description, 1e-3).unwrap();
+    let index = |name: &str| {
+        let specs = material.kind().params();
+        specs.iter().position(|s| s.name == name).unwrap() as u32
+    };
+    let n = 300;
+    let mut rng = Rng::new(0xfa11);
+    let normal: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
+    let wo: Vec<Vec3<f32>> = normal
+        .iter()
+        .map(|&nrm| {
+            let d = sphere(&mut rng);
+            if d.dot(nrm) < 0.0 { -d } else { d }
+        })
+        .collect();
+    let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
+    // Every third lane leaves the tangent to the library (all zero).
+    let tangent: Vec<Vec3<f32>> = (0..n)
+        .map(|i| {
+            if i % 3 == 0 {
+                Vec3::new(0.0, 0.0, 0.0)
+            } else {
+                sphere(&mut rng)
+            }
+        })
+        .collect();
+    let mut rough: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
+    let mut color = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
+    let (wo, wi, mut normal, mut tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
+    normal[0][7] = f32::NAN;
+    rough[7] = 2.0;
+    tangent[0][9] = 1e-30;
+    (tangent[1][9], tangent[2][9]) = (0.0, 0.0);
+    rough[20] = f32::NAN;
+    color[1][40] = -1.0;
+    let bad = [7, 9, 20, 40];
+    let run = |normal: &[Vec<f32>; 3], tangent: &[Vec<f32>; 3], rough: &[f32]| {
+        let overrides = [
+            material::OverrideLanes {
+                param: index("roughness"),
+                kind: ParamKind::Float,
+                value: [rough, rough, rough],
+            },
+            material::OverrideLanes {
+                param: index("base_color"),
+                kind: ParamKind::Rgb,
+                value: [&color[0], &color[1], &color[2]],
+            },
+        ];
+        let input = MaterialInput {
+            count: n,
+            material: &material,
+            active: None,
+            wo: soa(&wo),
+            normal: soa(normal),
+            tangent: Some(soa(tangent)),
+            overrides: &overrides,
+        };
+        let exec = Exec {
+            kernels: *Kernels::available().last().unwrap(),
+            threads: Threads::Caller,
+        };
+        let mut value = [vec![-1.0; n], vec![-1.0; n], vec![-1.0; n]];
+        let mut pdf = vec![-1.0; n];
+        let result = material::eval(
+            &exec,
+            &input,
+            soa(&wi),
+            EvalOutput {
+                value: soa_mut(&mut value),
+                pdf: &mut pdf,
+                pdf_reverse: None,
+            },
+        );
+        (result.err().map(|e| e.message), value, pdf)
+    };
+    let (error, value, pdf) = run(&normal, &tangent, &rough);
+    let error = error.expect("the batch reports its failing lanes");
+    assert!(error.starts_with("lane 7: normal"), "{error}");
+    for i in 0..n {
+        let v = [value[0][i], value[1][i], value[2][i], pdf[i]];
+        if bad.contains(&i) {
+            assert_eq!(v, [0.0; 4], "failed lane {i}");
+            continue;
+        }
+        let nrm = Vec3::new(normal[0][i], normal[1][i], normal[2][i]);
+        let t = Vec3::new(tangent[0][i], tangent[1][i], tangent[2][i]);
+        let t = (t.length_squared() > 0.0).then(|| t.normalize());
+        let ctx = glint::materials::ShadingContext::new(
+            Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
+            Frame::new(nrm, t),
+        );
+        let overrides = [
+            Override {
+                param: index("roughness"),
+                kind: ParamKind::Float,
+                value: [rough[i], 0.0, 0.0],
+            },
+            Override {
+                param: index("base_color"),
+                kind: ParamKind::Rgb,
+                value: [color[0][i], color[1][i], color[2][i]],
+            },
+        ];
+        let closure = material.closure(&ctx, &overrides).unwrap();
+        let e = closure
+            .eval_forward(ctx.wo, Vec3::new(wi[0][i], wi[1][i], wi[2][i]))
+            .unwrap();
+        let want = [e.value.r, e.value.g, e.value.b, e.pdf];
+        for (a, b) in v.iter().zip(want) {
+            assert!(
+                (a - b).abs() <= 2e-5 * b.abs().max(1e-3),
+                "lane {i}: batch {v:?}, closure {want:?}"
+            );
+        }
+    }
+    // With lane 7 repaired, lane 9's tangent is the first error, then lane 20's override.
+    (normal[0][7], rough[7]) = (0.0, 0.5);
+    let (error, ..) = run(&normal, &tangent, &rough);
+    assert!(
+        error.as_deref().unwrap().starts_with("lane 9: tangent"),
+        "{error:?}"
+    );
+    tangent[0][9] = 1.0;
+    let (error, ..) = run(&normal, &tangent, &rough);
+    let error = error.unwrap();
+    assert!(error.starts_with("lane 20: overrides[0]"), "{error}");
+}

@@ -11,12 +11,14 @@
 //! sample. A lane's result is that of the closure `glint_material_closure` builds for
 //! it, up to the batch kernels' rounding; slots every lane pruned are skipped.
 
-use super::stage::{Scratch, grow, padded, rows3, view3, with_scratch};
+use super::stage::{
+    LaneError, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch,
+};
 use super::{
     EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, SplitLanes, check_count,
     check_len, finish_lane, run_blocks,
 };
-use crate::closure::{MAX_LOBES, SampleResult, selection};
+use crate::closure::SampleResult;
 use crate::error::{Error, Status};
 use crate::kernels::expand::ExpandJob;
 use crate::kernels::{AlbedoJob, Directions, EvalJob, LobeLanes, SampleJob, mixture};
@@ -99,6 +101,8 @@ pub(super) struct SlotRows {
     /// Each lane's material block (overrides applied): value `p` of lane `j` at
     /// `p * len + j`.
     input: Vec<f32>,
+    /// Each lane's unit shading normal.
+    normal: [Vec<f32>; 3],
     /// `wo` in each lane's shading frame.
     local_wo: [Vec<f32>; 3],
     /// The blocks `expand` writes: slot `k`'s value `p` of lane `j` at
@@ -121,7 +125,7 @@ const MAX_PARAMS: usize = crate::lobes::MAX_DECODED_LEN;
 impl SlotRows {
     fn reserve(&mut self, len: usize, block_len: usize) -> Result<(), Error> {
         super::stage::reserve(&mut self.input, block_len * len)?;
-        for row in &mut self.local_wo {
+        for row in self.local_wo.iter_mut().chain(&mut self.normal) {
             super::stage::reserve(row, len)?;
         }
         super::stage::reserve(&mut self.raw, MAX_SLOTS * MAX_SLOT_PARAMS * len)?;
@@ -146,35 +150,17 @@ impl SlotRows {
     }
 }
 
-/// The first failing lane's error.
-#[derive(Default)]
-struct Failure(Option<(usize, Error)>);
-
-impl Failure {
-    fn fail(&mut self, lane: usize, e: Error) {
-        if self.0.as_ref().is_none_or(|(l, _)| lane < *l) {
-            self.0 = Some((lane, e));
-        }
-    }
-
-    fn into_result(self) -> Result<(), Error> {
-        self.0.map_or(Ok(()), |(lane, e)| {
-            Err(Error::new(e.status, format!("lane {lane}: {}", e.message)))
-        })
-    }
-}
-
 /// Stage the chunk's lanes `lanes` (`len` padded): unit `wo` into `s.wo`, frames and
 /// per-lane material blocks; then the expansion in SIMD, each slot's blocks decoded,
 /// and each slot's albedo prunes it and sets the selection probabilities. Lanes with
-/// invalid inputs are flagged in `s.failed`.
+/// invalid inputs are flagged in `s.failed` and staged with valid stand-ins.
 fn stage_chunk(
     kernels: Kernels,
     input: &MaterialInput<'_>,
     lanes: &[u32],
     len: usize,
     s: &mut Scratch,
-    failure: &mut Failure,
+    errors: &mut LaneError,
 ) -> Result<(), Error> {
     let material = input.material;
     let slots = material.slots();
@@ -184,38 +170,24 @@ fn stage_chunk(
     s.material.reserve(len, block_len)?;
     let failed = grow(&mut s.failed, len);
     failed.fill(0);
-    s.any_failed = false;
     let rows = &mut s.material;
-    let blocks = grow(&mut rows.input, block_len * len);
-    let frame_rows = grow(&mut rows.frame, 9 * len);
-    let [wo_x, wo_y, wo_z] = rows3(&mut s.wo, len);
-    let [lo_x, lo_y, lo_z] = rows3(&mut rows.local_wo, len);
-    let n = lanes.len();
-    let mut block = [0.0f32; MAX_MATERIAL_PARAMS];
-    for j in 0..len {
-        let lane = lanes[j.min(n - 1)] as usize;
-        let (wo, frame) = lane_inputs(input, lane, &mut block[..block_len]).unwrap_or_else(|e| {
-            if j < n {
-                failed[j] = 1;
-                s.any_failed = true;
-                failure.fail(lane, e);
-            }
-            // A valid stand-in, so the kernels compute finite values it discards.
-            block[..block_len].copy_from_slice(material.params());
-            (Vec3::new(0.0, 0.0, 1.0), Frame::IDENTITY)
-        });
-        (wo_x[j], wo_y[j], wo_z[j]) = (wo.x, wo.y, wo.z);
-        let local = frame.to_local(wo);
-        (lo_x[j], lo_y[j], lo_z[j]) = (local.x, local.y, local.z);
-        for (a, axis) in [frame.t, frame.b, frame.n].iter().enumerate() {
-            frame_rows[3 * a * len + j] = axis.x;
-            frame_rows[(3 * a + 1) * len + j] = axis.y;
-            frame_rows[(3 * a + 2) * len + j] = axis.z;
-        }
-        for (p, &v) in block[..block_len].iter().enumerate() {
-            blocks[p * len + j] = v;
-        }
-    }
+    // In the order the scalar call checks them: a lane reports its first error.
+    let mut any = stage_directions(
+        kernels, input.wo, "wo", lanes, len, &mut s.wo, failed, errors,
+    );
+    any |= stage_directions(
+        kernels,
+        input.normal,
+        "normal",
+        lanes,
+        len,
+        &mut rows.normal,
+        failed,
+        errors,
+    );
+    any |= stage_frames(input, lanes, len, &s.wo, rows, failed, errors);
+    any |= stage_blocks(input, lanes, len, rows, failed, errors);
+    s.any_failed = any;
     let mut block_lens = [0; MAX_SLOTS];
     for (b, (_, lobe)) in block_lens.iter_mut().zip(slots) {
         *b = params::block_size(lobe.params());
@@ -233,74 +205,141 @@ fn stage_chunk(
         },
     );
     let params = grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len);
-    let mut raw = [0.0f32; MAX_SLOT_PARAMS];
-    let mut decoded = [0.0f32; MAX_PARAMS];
     for (k, (_, lobe)) in slots.iter().enumerate() {
-        let (raw, decoded) = (
-            &mut raw[..block_lens[k]],
-            &mut decoded[..lobe.decoded_len()],
-        );
-        for j in 0..len {
-            for (p, r) in raw.iter_mut().enumerate() {
-                *r = rows.raw[(k * MAX_SLOT_PARAMS + p) * len + j];
-            }
-            lobe.decode(raw, decoded);
-            for (p, &v) in decoded.iter().enumerate() {
-                params[(k * MAX_PARAMS + p) * len + j] = v;
-            }
-        }
+        let raw = &rows.raw[k * MAX_SLOT_PARAMS * len..][..block_lens[k] * len];
+        let decoded = &mut params[k * MAX_PARAMS * len..][..lobe.decoded_len() * len];
+        lobe.decode_rows(raw, decoded, len);
     }
     prune(kernels, input.material, len, s)
 }
 
-/// Lane `lane`'s unit `wo`, its frame, and into `block` the material's parameters
-/// with the lane's overrides.
-fn lane_inputs(
+/// Each lane's shading frame (from the staged normal and the caller's tangent, as
+/// `Frame::new`) into the frame rows, and the staged `wo` in it into `local_wo`.
+/// Returns whether a tangent failed.
+fn stage_frames(
     input: &MaterialInput<'_>,
-    lane: usize,
-    block: &mut [f32],
-) -> Result<(Vec3<f32>, Frame), Error> {
-    let material = input.material;
-    let kind = material.kind();
-    let specs = kind.params();
-    let wo = Vec3::try_unit(input.wo.x[lane], input.wo.y[lane], input.wo.z[lane], "wo")?;
-    let normal = Vec3::try_unit(
-        input.normal.x[lane],
-        input.normal.y[lane],
-        input.normal.z[lane],
-        "normal",
-    )?;
-    let tangent = match &input.tangent {
-        Some(t) if t.x[lane] != 0.0 || t.y[lane] != 0.0 || t.z[lane] != 0.0 => {
-            Some(Vec3::try_unit(t.x[lane], t.y[lane], t.z[lane], "tangent")?)
+    lanes: &[u32],
+    len: usize,
+    wo: &[Vec<f32>; 3],
+    rows: &mut SlotRows,
+    failed: &mut [u8],
+    errors: &mut LaneError,
+) -> bool {
+    let mut any = false;
+    let frame_rows = grow(&mut rows.frame, 9 * len);
+    let [lo_x, lo_y, lo_z] = rows3(&mut rows.local_wo, len);
+    let [n_x, n_y, n_z] = view3(&rows.normal, len);
+    for j in 0..len {
+        // All-zero tangents (and padding lanes) leave the choice to `Frame::new`.
+        let tangent = match (&input.tangent, lanes.get(j)) {
+            (Some(t), Some(&lane)) => {
+                let lane = lane as usize;
+                let (x, y, z) = (t.x[lane], t.y[lane], t.z[lane]);
+                if x == 0.0 && y == 0.0 && z == 0.0 {
+                    None
+                } else {
+                    Vec3::try_unit(x, y, z, "tangent")
+                        .map_err(|e| {
+                            failed[j] = 1;
+                            any = true;
+                            errors.fail(lane, e);
+                        })
+                        .ok()
+                }
+            }
+            _ => None,
+        };
+        let frame = Frame::new(Vec3::new(n_x[j], n_y[j], n_z[j]), tangent);
+        let local = frame.to_local(Vec3::new(wo[0][j], wo[1][j], wo[2][j]));
+        (lo_x[j], lo_y[j], lo_z[j]) = (local.x, local.y, local.z);
+        for (a, axis) in [frame.t, frame.b, frame.n].iter().enumerate() {
+            frame_rows[3 * a * len + j] = axis.x;
+            frame_rows[(3 * a + 1) * len + j] = axis.y;
+            frame_rows[(3 * a + 2) * len + j] = axis.z;
         }
-        _ => None,
-    };
-    block.copy_from_slice(material.params());
-    for (i, o) in input.overrides.iter().enumerate() {
-        let at = params::offset_of(specs, o.param as usize);
-        let n = o.kind.size();
-        for c in 0..n {
-            block[at + c] = o.value[c][lane];
-        }
-        material.check_override_value(i, &specs[o.param as usize], &block[at..at + n])?;
     }
-    Ok((wo, Frame::new(normal, tangent)))
+    any
 }
 
-/// Each slot's `weight * albedo(wo)` (into the probability rows' place: `s.value`),
-/// then per lane the closure's pruning and selection rules.
+/// Each lane's material block with its overrides into the block rows: rows of the
+/// material's values, the overrides gathered over them and range-checked row by row
+/// (lane by lane, for the error, only when a row fails). Lanes that fail here or
+/// failed before get the material's own block, a valid stand-in. Returns whether an
+/// override failed.
+fn stage_blocks(
+    input: &MaterialInput<'_>,
+    lanes: &[u32],
+    len: usize,
+    rows: &mut SlotRows,
+    failed: &mut [u8],
+    errors: &mut LaneError,
+) -> bool {
+    let material = input.material;
+    let (specs, defaults) = (material.kind().params(), material.params());
+    let blocks = grow(&mut rows.input, defaults.len() * len);
+    for (row, &v) in blocks.chunks_exact_mut(len).zip(defaults) {
+        row.fill(v);
+    }
+    let n = lanes.len();
+    let mut any = false;
+    for (i, o) in input.overrides.iter().enumerate() {
+        let spec = &specs[o.param as usize];
+        let at = params::offset_of(specs, o.param as usize);
+        let size = o.kind.size();
+        // Enums are checked lane by lane: a choice index must also be whole.
+        let mut in_range = spec.kind != ParamKind::Enum;
+        for c in 0..size {
+            let row = &mut blocks[(at + c) * len..][..n];
+            for (r, &lane) in row.iter_mut().zip(lanes) {
+                *r = o.value[c][lane as usize];
+            }
+            in_range &= row.iter().fold(true, |ok, &v| {
+                ok & (v.abs() <= f32::MAX) & (v >= spec.min) & (v <= spec.max)
+            });
+        }
+        if in_range {
+            continue;
+        }
+        for (j, &lane) in lanes.iter().enumerate() {
+            let mut value = [0.0f32; 3];
+            for (c, v) in value[..size].iter_mut().enumerate() {
+                *v = blocks[(at + c) * len + j];
+            }
+            if let Err(e) = material.check_override_value(i, spec, &value[..size]) {
+                failed[j] = 1;
+                any = true;
+                errors.fail(lane as usize, e);
+            }
+        }
+    }
+    if any || failed.contains(&1) {
+        for j in (0..n).filter(|&j| failed[j] != 0) {
+            for (p, &v) in defaults.iter().enumerate() {
+                blocks[p * len + j] = v;
+            }
+        }
+    }
+    any
+}
+
+/// Each slot's `luminance(weight * albedo(wo))`, then per lane the closure's pruning
+/// and selection rules (`Material::emit`, `closure::selection`) row by row: the same
+/// operations in the same order, so the same probabilities.
 fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> Result<(), Error> {
     let slots = material.slots();
+    let count = slots.len();
     let rows = &mut s.material;
     // Out of the rows while the kernels read them, put back at the end.
     let mut share_rows = std::mem::take(&mut rows.shares);
-    let shares = grow(&mut share_rows, slots.len() * len);
-    grow(&mut rows.probability, MAX_SLOTS * len).fill(1.0);
+    let shares = grow(&mut share_rows, MAX_SLOTS * len);
+    // The albedo jobs read (and ignore) probability rows.
+    grow(&mut rows.probability, MAX_SLOTS * len);
     for (k, (_, lobe)) in slots.iter().enumerate() {
         let w = &rows.weight[k * 3 * len..(k + 1) * 3 * len];
         rows.live[k] = w.iter().any(|&w| w > 0.0);
+        let share = &mut shares[k * len..(k + 1) * len];
         if !rows.live[k] {
+            share.fill(0.0);
             continue;
         }
         let [vr, vg, vb] = rows3(&mut s.value, len);
@@ -315,70 +354,137 @@ fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> 
             out_of_range: false,
         };
         lobe.albedo_lanes(kernels, &mut job);
+        let [r, g, b] = view3(&s.value, len);
         for j in 0..len {
-            let a = Rgb::new(s.value[0][j], s.value[1][j], s.value[2][j]);
-            shares[k * len + j] = a.luminance();
+            share[j] = Rgb::new(r[j], g[j], b[j]).luminance();
         }
     }
+    let weight = &mut rows.weight;
+    // `keep[k]`: 1 where slot k is emitted and kept. Emitted: any weight channel > 0.
+    let [kept, strongest, strongest_share] = rows3(&mut s.sample_value, len);
+    kept.fill(0.0);
+    strongest.fill(-1.0);
+    strongest_share.fill(f32::NEG_INFINITY);
+    let keep = grow(&mut rows.probability, MAX_SLOTS * len);
     let prune = material.prune();
-    let (weight, probability) = (&mut rows.weight, &mut rows.probability);
-    for j in 0..len {
-        let mut kept = [0usize; MAX_LOBES];
-        let mut kept_shares = [0.0f32; MAX_LOBES];
-        let mut n = 0;
-        let mut strongest: Option<(f32, usize)> = None;
-        for (k, live) in rows.live[..slots.len()].iter().enumerate() {
-            let w = Rgb::new(
-                weight[k * 3 * len + j],
-                weight[(k * 3 + 1) * len + j],
-                weight[(k * 3 + 2) * len + j],
-            );
-            if !live || !(w.r > 0.0 || w.g > 0.0 || w.b > 0.0) {
-                continue;
-            }
-            let share = shares[k * len + j];
-            if share < prune {
-                if strongest.is_none_or(|(s, _)| share > s) {
-                    strongest = Some((share, k));
-                }
-                continue;
-            }
-            (kept[n], kept_shares[n]) = (k, share);
-            n += 1;
-        }
-        if let (0, Some((share, k))) = (n, strongest) {
-            (kept[0], kept_shares[0]) = (k, share);
-            n = 1;
-        }
-        let weight_of = |k: usize| {
-            Rgb::new(
-                weight[k * 3 * len + j],
-                weight[(k * 3 + 1) * len + j],
-                weight[(k * 3 + 2) * len + j],
-            )
-        };
-        let p = selection(&kept_shares[..n], |i| weight_of(kept[i]).luminance());
-        let mut is_kept = [false; MAX_SLOTS];
-        for (i, &k) in kept[..n].iter().enumerate() {
-            is_kept[k] = true;
-            probability[k * len + j] = p[i];
-        }
-        for k in 0..slots.len() {
-            if !is_kept[k] {
-                probability[k * len + j] = 0.0;
-                for c in 0..3 {
-                    weight[(k * 3 + c) * len + j] = 0.0;
-                }
-            }
+    for k in 0..count {
+        let w = &weight[k * 3 * len..(k + 1) * 3 * len];
+        let (wr, rest) = w.split_at(len);
+        let (wg, wb) = rest.split_at(len);
+        let lanes = keep[k * len..(k + 1) * len]
+            .iter_mut()
+            .zip(&shares[k * len..(k + 1) * len])
+            .zip(wr.iter().zip(wg).zip(wb))
+            .zip(kept.iter_mut())
+            .zip(strongest.iter_mut().zip(strongest_share.iter_mut()));
+        for ((((keep, &share), ((&r, &g), &b)), kept), (strongest, strongest_share)) in lanes {
+            let emitted = (r > 0.0) | (g > 0.0) | (b > 0.0);
+            let is_kept = emitted & (share >= prune);
+            *keep = if is_kept { 1.0 } else { 0.0 };
+            *kept += *keep;
+            // The first strongest pruned slot, kept when every slot is pruned.
+            let stronger = emitted & !is_kept & (share > *strongest_share);
+            *strongest_share = if stronger { share } else { *strongest_share };
+            *strongest = if stronger { k as f32 } else { *strongest };
         }
     }
-    for k in 0..slots.len() {
-        rows.live[k] = rows.probability[k * len..(k + 1) * len]
-            .iter()
-            .any(|&p| p > 0.0);
+    for k in 0..count {
+        let lanes = keep[k * len..(k + 1) * len]
+            .iter_mut()
+            .zip(kept.iter().zip(&*strongest));
+        for (keep, (&kept, &strongest)) in lanes {
+            let fallback = (kept == 0.0) & (strongest == k as f32);
+            *keep = if fallback { 1.0 } else { *keep };
+        }
+    }
+    selection_rows(keep, shares, weight, count, len, &mut s.pdf_reverse);
+    for k in 0..count {
+        let p = &rows.probability[k * len..(k + 1) * len];
+        for c in 0..3 {
+            for (w, &p) in weight[(k * 3 + c) * len..][..len].iter_mut().zip(p) {
+                *w = if p > 0.0 { *w } else { 0.0 };
+            }
+        }
+        rows.live[k] = p.iter().any(|&p| p > 0.0);
     }
     rows.shares = share_rows;
     Ok(())
+}
+
+/// `closure::selection` of each lane's kept slots, row by row: `p` holds 1 where a
+/// slot is kept (0 elsewhere) and becomes its selection probability. The shares
+/// (or weights' luminances, or ones) of kept slots, divided by the largest and then
+/// by their sum in slot order; a single kept slot gets 1.
+fn selection_rows(
+    p: &mut [f32],
+    shares: &[f32],
+    weight: &[f32],
+    count: usize,
+    len: usize,
+    scratch: &mut Vec<f32>,
+) {
+    let sums = grow(scratch, 3 * len);
+    let (kept, rest) = sums.split_at_mut(len);
+    let (share_sum, weight_sum) = rest.split_at_mut(len);
+    kept.fill(0.0);
+    share_sum.fill(0.0);
+    weight_sum.fill(0.0);
+    let weight_luminance = |k: usize, j: usize| {
+        Rgb::new(
+            weight[k * 3 * len + j],
+            weight[(k * 3 + 1) * len + j],
+            weight[(k * 3 + 2) * len + j],
+        )
+        .luminance()
+    };
+    for k in 0..count {
+        for j in 0..len {
+            let keep = p[k * len + j];
+            kept[j] += keep;
+            share_sum[j] += keep * shares[k * len + j].max(0.0);
+            weight_sum[j] += keep * weight_luminance(k, j).max(0.0);
+        }
+    }
+    // The value each kept slot is weighted by: `p[k]` becomes it, then its share.
+    for k in 0..count {
+        for j in 0..len {
+            let keep = p[k * len + j];
+            let by = if kept[j] == 1.0 {
+                1.0
+            } else if share_sum[j] > 0.0 {
+                shares[k * len + j].max(0.0)
+            } else if weight_sum[j] > 0.0 {
+                weight_luminance(k, j).max(0.0)
+            } else {
+                1.0
+            };
+            p[k * len + j] = keep * by;
+        }
+    }
+    let largest = &mut share_sum[..];
+    largest.fill(0.0);
+    for k in 0..count {
+        for (m, &v) in largest.iter_mut().zip(&p[k * len..(k + 1) * len]) {
+            *m = m.max(v);
+        }
+    }
+    let total = &mut weight_sum[..];
+    total.fill(0.0);
+    for k in 0..count {
+        for ((t, v), &m) in total
+            .iter_mut()
+            .zip(&mut p[k * len..(k + 1) * len])
+            .zip(&*largest)
+        {
+            *v /= m;
+            *t += *v;
+        }
+    }
+    for k in 0..count {
+        for (v, &t) in p[k * len..(k + 1) * len].iter_mut().zip(&*total) {
+            *v /= t;
+        }
+    }
 }
 
 /// The chunks of active lanes of `range`: `f(lanes)` for each.
@@ -459,24 +565,6 @@ fn eval_chunk(
             };
             lobe.eval_lanes(kernels, &mut job);
         }
-    }
-}
-
-/// Stage `wi` of `lanes` into `s.wi` (unit); invalid lanes are flagged.
-fn stage_wi(wi: Soa3<'_>, lanes: &[u32], len: usize, s: &mut Scratch, failure: &mut Failure) {
-    let n = lanes.len();
-    let [x, y, z] = rows3(&mut s.wi, len);
-    for j in 0..len {
-        let lane = lanes[j.min(n - 1)] as usize;
-        let v = Vec3::try_unit(wi.x[lane], wi.y[lane], wi.z[lane], "wi").unwrap_or_else(|e| {
-            if j < n {
-                s.failed[j] = 1;
-                s.any_failed = true;
-                failure.fail(lane, e);
-            }
-            Vec3::new(0.0, 0.0, 1.0)
-        });
-        (x[j], y[j], z[j]) = (v.x, v.y, v.z);
     }
 }
 
@@ -566,12 +654,21 @@ fn eval_block(
     out: &mut MaterialEvalOutput<'_>,
 ) -> Result<(), Error> {
     let end = (start + super::BLOCK).min(input.count);
-    let mut failure = Failure::default();
+    let mut failure = LaneError::default();
     with_scratch(|s| {
         for_chunks(input, start..end, s, |lanes, s| {
             let len = padded(lanes.len());
             stage_chunk(kernels, input, lanes, len, s, &mut failure)?;
-            stage_wi(wi, lanes, len, s, &mut failure);
+            s.any_failed |= stage_directions(
+                kernels,
+                wi,
+                "wi",
+                lanes,
+                len,
+                &mut s.wi,
+                &mut s.failed,
+                &mut failure,
+            );
             let want_reverse = out.pdf_reverse.is_some();
             eval_chunk(
                 kernels,
@@ -593,7 +690,7 @@ fn eval_block(
             Ok(())
         })
     })?;
-    failure.into_result()
+    failure.take().map_or(Ok(()), Err)
 }
 
 /// Directional albedo of the material at every active lane (what
@@ -603,7 +700,7 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
     out.check(input.count, "albedo")?;
     run_blocks(exec, input.count, out, |start, out| {
         let end = (start + super::BLOCK).min(input.count);
-        let mut failure = Failure::default();
+        let mut failure = LaneError::default();
         with_scratch(|s| {
             for_chunks(input, start..end, s, |lanes, s| {
                 let len = padded(lanes.len());
@@ -637,7 +734,7 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
                 Ok(())
             })
         })?;
-        failure.into_result()
+        failure.take().map_or(Ok(()), Err)
     })
 }
 
@@ -657,7 +754,7 @@ pub fn sample(
     out.check(n)?;
     run_blocks(exec, n, out, |start, mut out| {
         let end = (start + super::BLOCK).min(n);
-        let mut failure = Failure::default();
+        let mut failure = LaneError::default();
         with_scratch(|s| {
             for_chunks(input, start..end, s, |lanes, s| {
                 sample_chunk(
@@ -672,7 +769,7 @@ pub fn sample(
                 )
             })
         })?;
-        failure.into_result()
+        failure.take().map_or(Ok(()), Err)
     })
 }
 
@@ -684,7 +781,7 @@ fn sample_chunk(
     lanes: &[u32],
     base: usize,
     s: &mut Scratch,
-    failure: &mut Failure,
+    failure: &mut LaneError,
     out: &mut SampleOutput<'_>,
 ) -> Result<(), Error> {
     let len = padded(lanes.len());

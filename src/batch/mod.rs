@@ -631,7 +631,16 @@ fn stage_input<'a, C: ClosureSource<'a>>(
     } = s;
     let lanes = std::mem::take(&mut groups.list_mut()[g].lanes);
     let mut stage = |src: Soa3<'_>, what: &str, rows: &mut [Vec<f32>; 3]| {
-        *any_failed |= stage_directions(kernels, src, what, &lanes, len, rows, failed, groups);
+        *any_failed |= stage_directions(
+            kernels,
+            src,
+            what,
+            &lanes,
+            len,
+            rows,
+            failed,
+            &mut groups.error,
+        );
     };
     stage(input.wo, "wo", wo_rows);
     if let Some(wi) = wi {

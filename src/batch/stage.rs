@@ -36,11 +36,31 @@ pub(super) struct Groups {
     used: usize,
     /// Lanes that get zero outputs without being computed.
     pub failed: Vec<u32>,
-    error: Option<(usize, Error)>,
+    pub error: LaneError,
     /// Per block-local lane: the lobe-choice number rescaled for the chosen lobe.
     pub u_reused: Vec<f32>,
     /// Group by (shape id, chosen lobe), for the groups created this block.
     index: HashMap<(u64, usize), usize>,
+}
+
+/// The error of a block's lowest failing lane.
+#[derive(Default)]
+pub(super) struct LaneError(Option<(usize, Error)>);
+
+impl LaneError {
+    /// Record a lane's failure; the lowest lane's first error is kept.
+    pub fn fail(&mut self, lane: usize, e: Error) {
+        if self.0.as_ref().is_none_or(|(l, _)| lane < *l) {
+            self.0 = Some((lane, e));
+        }
+    }
+
+    /// The error, prefixed with its lane's index.
+    pub fn take(&mut self) -> Option<Error> {
+        self.0
+            .take()
+            .map(|(lane, e)| Error::new(e.status, format!("lane {lane}: {}", e.message)))
+    }
 }
 
 /// The random numbers of a sampling call.
@@ -60,16 +80,12 @@ impl Groups {
 
     /// Record a lane's failure; the lowest lane's error is reported.
     pub fn fail(&mut self, lane: usize, e: Error) {
-        if self.error.as_ref().is_none_or(|(l, _)| lane < *l) {
-            self.error = Some((lane, e));
-        }
+        self.error.fail(lane, e);
     }
 
     /// The error of the lowest failing lane, prefixed with its index.
     pub fn take_error(&mut self) -> Option<Error> {
-        self.error
-            .take()
-            .map(|(lane, e)| Error::new(e.status, format!("lane {lane}: {}", e.message)))
+        self.error.take()
     }
 
     /// Group the active lanes of `range`. With `randoms`, each lane also chooses its
@@ -84,7 +100,7 @@ impl Groups {
         self.used = 0;
         self.index.clear();
         self.failed.clear();
-        self.error = None;
+        self.error = LaneError::default();
         self.u_reused.clear();
         reserve(&mut self.failed, range.len())?;
         reserve(&mut self.u_reused, range.len())?;
@@ -304,8 +320,8 @@ pub(super) fn padded(lanes: usize) -> usize {
 }
 
 /// Stage `src` at `lanes` into `dst`, normalized, padding to `len` with +z. Lanes
-/// with invalid directions are flagged in `failed`, reported through `groups`, and
-/// staged as +z; returns whether there were any.
+/// with invalid directions are flagged in `failed`, reported to `errors`, and staged
+/// as +z; returns whether there were any.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn stage_directions(
     kernels: Kernels,
@@ -315,7 +331,7 @@ pub(super) fn stage_directions(
     len: usize,
     dst: &mut [Vec<f32>; 3],
     failed: &mut [u8],
-    groups: &mut Groups,
+    errors: &mut LaneError,
 ) -> bool {
     let mut rows = rows3(dst, len);
     let n = lanes.len();
@@ -347,7 +363,7 @@ pub(super) fn stage_directions(
         let v = Vec3::try_unit(src.x[lane], src.y[lane], src.z[lane], what).unwrap_or_else(|e| {
             failed[j] = 1;
             any_failed = true;
-            groups.fail(lane, e);
+            errors.fail(lane, e);
             Vec3::new(0.0, 0.0, 1.0)
         });
         rows[0][j] = v.x;

@@ -327,6 +327,13 @@ pub trait LobeType: Send + Sync {
     fn decode(&self, params: &[f32], out: &mut [f32]) {
         out.copy_from_slice(params);
     }
+    /// [`LobeType::decode`] of `len` lanes' blocks in rows (value `p` of lane `j` at
+    /// `p * len + j`, in `params` and in `out`).
+    fn decode_rows(&self, params: &[f32], out: &mut [f32], len: usize) {
+        decode_rows(params, out, len, |block, decoded| {
+            self.decode(block, decoded)
+        });
+    }
     /// [`LobeType::eval`] from a decoded block.
     fn eval_decoded(
         &self,
@@ -499,6 +506,9 @@ impl<M: Model> LobeType for Builtin<M> {
     fn decode(&self, params: &[f32], out: &mut [f32]) {
         M::decode(params, out);
     }
+    fn decode_rows(&self, params: &[f32], out: &mut [f32], len: usize) {
+        decode_rows(params, out, len, M::decode);
+    }
     fn eval_decoded(
         &self,
         decoded: &[f32],
@@ -567,6 +577,23 @@ fn decoded<M: Model>(params: &[f32]) -> DecodedBlock {
     let mut block = DecodedBlock([0.0; MAX_DECODED_LEN], M::DECODED_LEN);
     M::decode(params, &mut block.0[..M::DECODED_LEN]);
     block
+}
+
+/// `decode` of each lane's block in rows (see [`LobeType::decode_rows`]).
+#[inline(always)]
+fn decode_rows(params: &[f32], out: &mut [f32], len: usize, decode: impl Fn(&[f32], &mut [f32])) {
+    let (size, decoded_size) = (params.len() / len, out.len() / len);
+    let mut block = [0.0f32; MAX_DECODED_LEN];
+    let mut decoded = [0.0f32; MAX_DECODED_LEN];
+    for j in 0..len {
+        for (p, v) in block[..size].iter_mut().enumerate() {
+            *v = params[p * len + j];
+        }
+        decode(&block[..size], &mut decoded[..decoded_size]);
+        for (p, &v) in decoded[..decoded_size].iter().enumerate() {
+            out[p * len + j] = v;
+        }
+    }
 }
 
 /// A decoded block on the stack.
