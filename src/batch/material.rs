@@ -25,6 +25,7 @@ use crate::kernels::{AlbedoJob, Directions, EvalJob, LobeLanes, SampleJob, mixtu
 use crate::lobes::Transport;
 use crate::materials::compiled::MAX_MATERIAL_PARAMS;
 use crate::materials::{MAX_SLOT_PARAMS, MAX_SLOTS, Material};
+use crate::math::frame::duff_axes;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params::{self, ParamKind};
 use crate::simd::Kernels;
@@ -227,38 +228,58 @@ fn stage_frames(
 ) -> bool {
     let mut any = false;
     let frame_rows = grow(&mut rows.frame, 9 * len);
-    let [lo_x, lo_y, lo_z] = rows3(&mut rows.local_wo, len);
-    let [n_x, n_y, n_z] = view3(&rows.normal, len);
+    let (t, rest) = frame_rows.split_at_mut(3 * len);
+    let (b, n) = rest.split_at_mut(3 * len);
+    let ([tx, ty, tz], [bx, by, bz], [nx, ny, nz]) = (split3(t), split3(b), split3(n));
+    let [sx, sy, sz] = view3(&rows.normal, len);
+    // Every lane's frame from its normal alone first (`Frame::new` without a
+    // tangent), row by row.
     for j in 0..len {
-        // All-zero tangents (and padding lanes) leave the choice to `Frame::new`.
-        let tangent = match (&input.tangent, lanes.get(j)) {
-            (Some(t), Some(&lane)) => {
-                let lane = lane as usize;
-                let (x, y, z) = (t.x[lane], t.y[lane], t.z[lane]);
-                if x == 0.0 && y == 0.0 && z == 0.0 {
-                    None
-                } else {
-                    Vec3::try_unit(x, y, z, "tangent")
-                        .map_err(|e| {
-                            failed[j] = 1;
-                            any = true;
-                            errors.fail(lane, e);
-                        })
-                        .ok()
+        let n = Vec3::new(sx[j], sy[j], sz[j]);
+        let (t, b) = duff_axes(n);
+        (tx[j], ty[j], tz[j]) = (t.x, t.y, t.z);
+        (bx[j], by[j], bz[j]) = (b.x, b.y, b.z);
+        (nx[j], ny[j], nz[j]) = (n.x, n.y, n.z);
+    }
+    // Then the lanes with a tangent (all-zero ones leave the choice to the library).
+    if let Some(tangents) = &input.tangent {
+        for (j, &lane) in lanes.iter().enumerate() {
+            let lane = lane as usize;
+            let (x, y, z) = (tangents.x[lane], tangents.y[lane], tangents.z[lane]);
+            if x == 0.0 && y == 0.0 && z == 0.0 {
+                continue;
+            }
+            match Vec3::try_unit(x, y, z, "tangent") {
+                Ok(tangent) => {
+                    let f = Frame::new(Vec3::new(sx[j], sy[j], sz[j]), Some(tangent));
+                    (tx[j], ty[j], tz[j]) = (f.t.x, f.t.y, f.t.z);
+                    (bx[j], by[j], bz[j]) = (f.b.x, f.b.y, f.b.z);
+                }
+                Err(e) => {
+                    failed[j] = 1;
+                    any = true;
+                    errors.fail(lane, e);
                 }
             }
-            _ => None,
-        };
-        let frame = Frame::new(Vec3::new(n_x[j], n_y[j], n_z[j]), tangent);
-        let local = frame.to_local(Vec3::new(wo[0][j], wo[1][j], wo[2][j]));
-        (lo_x[j], lo_y[j], lo_z[j]) = (local.x, local.y, local.z);
-        for (a, axis) in [frame.t, frame.b, frame.n].iter().enumerate() {
-            frame_rows[3 * a * len + j] = axis.x;
-            frame_rows[(3 * a + 1) * len + j] = axis.y;
-            frame_rows[(3 * a + 2) * len + j] = axis.z;
         }
     }
+    let [lo_x, lo_y, lo_z] = rows3(&mut rows.local_wo, len);
+    let [wx, wy, wz] = view3(wo, len);
+    for j in 0..len {
+        let w = Vec3::new(wx[j], wy[j], wz[j]);
+        lo_x[j] = w.dot(Vec3::new(tx[j], ty[j], tz[j]));
+        lo_y[j] = w.dot(Vec3::new(bx[j], by[j], bz[j]));
+        lo_z[j] = w.dot(Vec3::new(nx[j], ny[j], nz[j]));
+    }
     any
+}
+
+/// Three rows of `len` values from `3 len`.
+fn split3(v: &mut [f32]) -> [&mut [f32]; 3] {
+    let len = v.len() / 3;
+    let (x, rest) = v.split_at_mut(len);
+    let (y, z) = rest.split_at_mut(len);
+    [x, y, z]
 }
 
 /// Each lane's material block with its overrides into the block rows: rows of the
@@ -290,9 +311,7 @@ fn stage_blocks(
         let mut in_range = spec.kind != ParamKind::Enum;
         for c in 0..size {
             let row = &mut blocks[(at + c) * len..][..n];
-            for (r, &lane) in row.iter_mut().zip(lanes) {
-                *r = o.value[c][lane as usize];
-            }
+            gather(row, o.value[c], lanes);
             in_range &= row.iter().fold(true, |ok, &v| {
                 ok & (v.abs() <= f32::MAX) & (v >= spec.min) & (v <= spec.max)
             });
@@ -320,6 +339,28 @@ fn stage_blocks(
         }
     }
     any
+}
+
+/// Slot `k`'s weight rows.
+fn slot_weight(weight: &[f32], k: usize, len: usize) -> [&[f32]; 3] {
+    let w = &weight[k * 3 * len..(k + 1) * 3 * len];
+    let (r, rest) = w.split_at(len);
+    let (g, b) = rest.split_at(len);
+    [r, g, b]
+}
+
+/// `row[j] = src[lanes[j]]`.
+fn gather(row: &mut [f32], src: &[f32], lanes: &[u32]) {
+    match (lanes.first(), lanes.last()) {
+        (Some(&a), Some(&b)) if (b - a) as usize + 1 == lanes.len() => {
+            row.copy_from_slice(&src[a as usize..=b as usize]);
+        }
+        _ => {
+            for (r, &lane) in row.iter_mut().zip(lanes) {
+                *r = src[lane as usize];
+            }
+        }
+    }
 }
 
 /// Each slot's `luminance(weight * albedo(wo))`, then per lane the closure's pruning
@@ -368,33 +409,28 @@ fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> 
     let keep = grow(&mut rows.probability, MAX_SLOTS * len);
     let prune = material.prune();
     for k in 0..count {
-        let w = &weight[k * 3 * len..(k + 1) * 3 * len];
-        let (wr, rest) = w.split_at(len);
-        let (wg, wb) = rest.split_at(len);
-        let lanes = keep[k * len..(k + 1) * len]
-            .iter_mut()
-            .zip(&shares[k * len..(k + 1) * len])
-            .zip(wr.iter().zip(wg).zip(wb))
-            .zip(kept.iter_mut())
-            .zip(strongest.iter_mut().zip(strongest_share.iter_mut()));
-        for ((((keep, &share), ((&r, &g), &b)), kept), (strongest, strongest_share)) in lanes {
-            let emitted = (r > 0.0) | (g > 0.0) | (b > 0.0);
-            let is_kept = emitted & (share >= prune);
-            *keep = if is_kept { 1.0 } else { 0.0 };
-            *kept += *keep;
+        let [wr, wg, wb] = slot_weight(weight, k, len);
+        let (keep, share) = (&mut keep[k * len..][..len], &shares[k * len..][..len]);
+        for j in 0..len {
+            let emitted = (wr[j] > 0.0) | (wg[j] > 0.0) | (wb[j] > 0.0);
+            let is_kept = emitted & (share[j] >= prune);
+            keep[j] = if is_kept { 1.0 } else { 0.0 };
+            kept[j] += keep[j];
             // The first strongest pruned slot, kept when every slot is pruned.
-            let stronger = emitted & !is_kept & (share > *strongest_share);
-            *strongest_share = if stronger { share } else { *strongest_share };
-            *strongest = if stronger { k as f32 } else { *strongest };
+            let stronger = emitted & !is_kept & (share[j] > strongest_share[j]);
+            strongest_share[j] = if stronger {
+                share[j]
+            } else {
+                strongest_share[j]
+            };
+            strongest[j] = if stronger { k as f32 } else { strongest[j] };
         }
     }
     for k in 0..count {
-        let lanes = keep[k * len..(k + 1) * len]
-            .iter_mut()
-            .zip(kept.iter().zip(&*strongest));
-        for (keep, (&kept, &strongest)) in lanes {
-            let fallback = (kept == 0.0) & (strongest == k as f32);
-            *keep = if fallback { 1.0 } else { *keep };
+        let keep = &mut keep[k * len..][..len];
+        for j in 0..len {
+            let fallback = (kept[j] == 0.0) & (strongest[j] == k as f32);
+            keep[j] = if fallback { 1.0 } else { keep[j] };
         }
     }
     selection_rows(keep, shares, weight, count, len, &mut s.pdf_reverse);
@@ -429,60 +465,54 @@ fn selection_rows(
     kept.fill(0.0);
     share_sum.fill(0.0);
     weight_sum.fill(0.0);
-    let weight_luminance = |k: usize, j: usize| {
-        Rgb::new(
-            weight[k * 3 * len + j],
-            weight[(k * 3 + 1) * len + j],
-            weight[(k * 3 + 2) * len + j],
-        )
-        .luminance()
-    };
     for k in 0..count {
+        let [wr, wg, wb] = slot_weight(weight, k, len);
+        let (keep, share) = (&p[k * len..][..len], &shares[k * len..][..len]);
         for j in 0..len {
-            let keep = p[k * len + j];
-            kept[j] += keep;
-            share_sum[j] += keep * shares[k * len + j].max(0.0);
-            weight_sum[j] += keep * weight_luminance(k, j).max(0.0);
+            kept[j] += keep[j];
+            share_sum[j] += keep[j] * share[j].max(0.0);
+            weight_sum[j] += keep[j] * Rgb::new(wr[j], wg[j], wb[j]).luminance().max(0.0);
         }
     }
     // The value each kept slot is weighted by: `p[k]` becomes it, then its share.
     for k in 0..count {
+        let [wr, wg, wb] = slot_weight(weight, k, len);
+        let (p, share) = (&mut p[k * len..][..len], &shares[k * len..][..len]);
         for j in 0..len {
-            let keep = p[k * len + j];
             let by = if kept[j] == 1.0 {
                 1.0
             } else if share_sum[j] > 0.0 {
-                shares[k * len + j].max(0.0)
+                share[j].max(0.0)
             } else if weight_sum[j] > 0.0 {
-                weight_luminance(k, j).max(0.0)
+                Rgb::new(wr[j], wg[j], wb[j]).luminance().max(0.0)
             } else {
                 1.0
             };
-            p[k * len + j] = keep * by;
+            p[j] *= by;
         }
     }
-    let largest = &mut share_sum[..];
+    // Divided by the largest, then by the sum in slot order (`normalize_shares`).
+    let largest = share_sum;
     largest.fill(0.0);
     for k in 0..count {
-        for (m, &v) in largest.iter_mut().zip(&p[k * len..(k + 1) * len]) {
-            *m = m.max(v);
+        let p = &p[k * len..][..len];
+        for j in 0..len {
+            largest[j] = largest[j].max(p[j]);
         }
     }
-    let total = &mut weight_sum[..];
+    let total = weight_sum;
     total.fill(0.0);
     for k in 0..count {
-        for ((t, v), &m) in total
-            .iter_mut()
-            .zip(&mut p[k * len..(k + 1) * len])
-            .zip(&*largest)
-        {
-            *v /= m;
-            *t += *v;
+        let p = &mut p[k * len..][..len];
+        for j in 0..len {
+            p[j] /= largest[j];
+            total[j] += p[j];
         }
     }
     for k in 0..count {
-        for (v, &t) in p[k * len..(k + 1) * len].iter_mut().zip(&*total) {
-            *v /= t;
+        let p = &mut p[k * len..][..len];
+        for j in 0..len {
+            p[j] /= total[j];
         }
     }
 }

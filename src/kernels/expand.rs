@@ -33,6 +33,7 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     let slots = M::LOBES.len();
     let mut raw = [L::zero(); MAX_MATERIAL_PARAMS];
     let zero = Vec3::new(L::zero(), L::zero(), L::zero());
+    let mut e = Expansion::<L>::default();
     for i in (0..len).step_by(L::LANES) {
         for (p, r) in raw[..job.param_count].iter_mut().enumerate() {
             *r = L::load(&job.params[p * len + i..]);
@@ -50,7 +51,14 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             footprint: L::zero(),
             uv: [L::zero(); 2],
         };
-        let mut e = Expansion::<L>::default();
+        // What is read back starts at zero for each register, as a fresh `Expansion`
+        // would (zeroing all of it costs more than the expansion).
+        for k in 0..slots {
+            e.weight[k] = Rgb::zero();
+            for v in &mut e.params[k][..job.block_len[k]] {
+                *v = L::zero();
+            }
+        }
         M::expand(Params::new(&raw[..job.param_count]), &ctx, &mut e);
         for k in 0..slots {
             let Rgb { r, g, b } = e.weight[k];

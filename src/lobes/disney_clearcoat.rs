@@ -60,6 +60,7 @@ impl Model for DisneyClearcoat {
     const NAME: &'static str = "disney_clearcoat";
     const SUMMARY: &'static str =
         "Disney principled clearcoat (Burley 2012): GTR1, Schlick IOR 1.5, masking roughness 0.25";
+    const DECODE_COPIES: bool = true;
     const PARAMS: &'static [ParamSpec] = &[ParamSpec::float(
         "gloss",
         1.0,

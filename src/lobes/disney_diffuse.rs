@@ -137,6 +137,7 @@ impl Model for DisneyDiffuse {
     const NAME: &'static str = "disney_diffuse";
     const SUMMARY: &'static str =
         "Disney principled diffuse (Burley 2012): grazing retro-reflection, subsurface blend";
+    const DECODE_COPIES: bool = true;
     const PARAMS: &'static [ParamSpec] = &[
         ParamSpec::rgb("base_color", [0.8; 3], 0.0, 1.0, "diffuse color"),
         ParamSpec::float(

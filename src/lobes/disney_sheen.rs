@@ -64,6 +64,7 @@ fn shape<L: Lane>(wo: Vec3<L>, wi: Vec3<L>) -> L {
 impl Model for DisneySheen {
     const NAME: &'static str = "disney_sheen";
     const SUMMARY: &'static str = "Disney principled sheen (Burley 2012): (1 - l.h)^5 color";
+    const DECODE_COPIES: bool = true;
     const PARAMS: &'static [ParamSpec] = &[ParamSpec::rgb(
         "color",
         [1.0; 3],

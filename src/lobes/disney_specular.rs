@@ -62,6 +62,7 @@ fn smith<L: Lane>(w: Vec3<L>, gx: L, gy: L) -> L {
 impl Model for DisneySpecular {
     const NAME: &'static str = "disney_specular";
     const SUMMARY: &'static str = "Disney principled specular (Burley 2012): anisotropic GTR2, Schlick, remapped Smith masking";
+    const DECODE_COPIES: bool = true;
     const PARAMS: &'static [ParamSpec] = &[
         ParamSpec::float(
             "roughness",

@@ -22,6 +22,7 @@ pub struct Prepared<L> {
 impl Model for Lambert {
     const NAME: &'static str = "lambert";
     const SUMMARY: &'static str = "Ideal diffuse reflection (Lambert)";
+    const DECODE_COPIES: bool = true;
     const PARAMS: &'static [ParamSpec] = &[ParamSpec::rgb(
         "color",
         [0.8; 3],

@@ -276,6 +276,10 @@ pub trait Model: Send + Sync + 'static {
     fn decode(params: &[f32], out: &mut [f32]) {
         out.copy_from_slice(params);
     }
+    /// Whether [`Model::decode`] is the default copy, so blocks in rows (material
+    /// batches) decode as whole rows. Opt-in; tests/decode_rows.rs checks the claim
+    /// of every registered type.
+    const DECODE_COPIES: bool = false;
     /// The leading part of the decoded block that `eval` and `sample` read: blocks
     /// staged per lane for them stop there (what follows only `albedo` reads).
     const LANE_DECODED_LEN: usize = Self::DECODED_LEN;
@@ -507,7 +511,11 @@ impl<M: Model> LobeType for Builtin<M> {
         M::decode(params, out);
     }
     fn decode_rows(&self, params: &[f32], out: &mut [f32], len: usize) {
-        decode_rows(params, out, len, M::decode);
+        if M::DECODE_COPIES && params.len() == out.len() {
+            out.copy_from_slice(params);
+        } else {
+            decode_rows(params, out, len, M::decode);
+        }
     }
     fn eval_decoded(
         &self,

@@ -41,34 +41,30 @@ impl Frame {
     /// chosen with Duff et al. 2017 ("Building an Orthonormal Basis, Revisited").
     pub fn new(n: Vec3<f32>, tangent: Option<Vec3<f32>>) -> Frame {
         let n64 = F64::from(n);
-        let t = tangent
-            .map(F64::from)
-            .and_then(|t| {
-                // Divided by |n|^2: an f32 normal is unit only to ~1e-8, and that
-                // much of n.t ~ 1 would stay in a small perpendicular part.
-                let perp = t.sub(n64.scale(n64.dot(t) / n64.dot(n64)));
-                let len2 = perp.dot(perp);
-                (len2 > (Self::PARALLEL_TANGENT * Self::PARALLEL_TANGENT) * t.dot(t))
-                    .then(|| perp.scale(1.0 / len2.sqrt()))
-            })
-            .unwrap_or_else(|| F64::from(Self::duff_tangent(n)));
-        Frame {
-            t: t.to32(),
-            b: n64.cross(t).to32(),
-            n,
+        let t = tangent.map(F64::from).and_then(|t| {
+            // Divided by |n|^2: an f32 normal is unit only to ~1e-8, and that
+            // much of n.t ~ 1 would stay in a small perpendicular part.
+            let perp = t.sub(n64.scale(n64.dot(t) / n64.dot(n64)));
+            let len2 = perp.dot(perp);
+            (len2 > (Self::PARALLEL_TANGENT * Self::PARALLEL_TANGENT) * t.dot(t))
+                .then(|| perp.scale(1.0 / len2.sqrt()))
+        });
+        match t {
+            Some(t) => Frame {
+                t: t.to32(),
+                b: n64.cross(t).to32(),
+                n,
+            },
+            None => {
+                let (t, b) = duff_axes(n);
+                Frame { t, b, n }
+            }
         }
     }
 
     /// Relative size of a tangent's part perpendicular to the normal below which
     /// [`Self::new`] treats the tangent as absent.
     pub const PARALLEL_TANGENT: f64 = 1e-6;
-
-    fn duff_tangent(n: Vec3<f32>) -> Vec3<f32> {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x)
-    }
 
     #[inline]
     pub fn to_local(&self, v: Vec3<f32>) -> Vec3<f32> {
@@ -138,4 +134,18 @@ impl F64 {
             a[0] * b[1] - a[1] * b[0],
         ])
     }
+}
+
+/// Tangent and bitangent `n x t` of a unit normal `n`, an orthonormal right-handed
+/// basis without branches (Duff et al. 2017, listing 3), for any lane type: material
+/// batches build their frames with it over rows, and get `Frame::new`'s bits.
+#[inline(always)]
+pub fn duff_axes<L: Lane>(n: Vec3<L>) -> (Vec3<L>, Vec3<L>) {
+    let sign = L::one().copysign(n.z);
+    let a = -(L::one() / (sign + n.z));
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(L::one() + sign * n.x * n.x * a, sign * b, -(sign * n.x)),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
 }
