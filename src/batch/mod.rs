@@ -997,32 +997,71 @@ fn mixture_in_place(
     ) {
         return false;
     }
+    // Each lobe samples only the lanes that chose it, gathered and scattered back.
+    let (mut wi, mut own_value) = (rows3(&mut s.wi, n), rows3(&mut s.sample_value, n));
+    let (own_pdf, eta) = (grow(&mut s.sample_pdf, n), grow(&mut s.eta, n));
+    let (roughness, events) = (grow(&mut s.roughness, n), grow(&mut s.events, n));
+    let c = &mut s.compact;
+    // The lanes grouped by chosen lobe (a counting sort): lobe k's at `starts[k]..`.
+    let count = closure.lobes().len();
+    let mut starts = [0usize; MAX_LOBES + 1];
+    for &k in &s.chosen[..n] {
+        starts[k as usize + 1] += 1;
+    }
+    for k in 0..count {
+        starts[k + 1] += starts[k];
+    }
+    let mut next = starts;
+    let order = grow(&mut c.index, n);
+    for (j, &k) in s.chosen[..n].iter().enumerate() {
+        order[next[k as usize]] = j as u32;
+        next[k as usize] += 1;
+    }
     for (k, l) in closure.lobes().iter().enumerate() {
-        if !s.chosen[..n].contains(&(k as f32)) {
+        let index = &c.index[starts[k]..starts[k + 1]];
+        let m = index.len();
+        if m == 0 {
             continue;
         }
-        let [sv_r, sv_g, sv_b] = &mut s.sample_value;
+        let inputs = view3(&s.wo, n).into_iter().chain([
+            &s.u[0][..n],
+            &u.u0[lanes.clone()],
+            &u.u1[lanes.clone()],
+        ]);
+        for (dst, src) in c.wo.iter_mut().chain(&mut c.u).zip(inputs) {
+            for (d, &j) in grow(dst, m).iter_mut().zip(index) {
+                *d = src[j as usize];
+            }
+        }
         let mut job = SampleJob {
-            len: n,
+            len: m,
             mode: closure.transport(),
             directions: Directions::Unit,
-            wo: view3(&s.wo, n),
-            u: [&s.u[0][..n], &u.u0[lanes.clone()], &u.u1[lanes.clone()]],
+            wo: view3(&c.wo, m),
+            u: view3(&c.u, m),
             lobe: uniform_lobe(closure, k),
-            wi: rows3(&mut s.wi, n),
-            value: [grow(sv_r, n), grow(sv_g, n), grow(sv_b, n)],
-            pdf: grow(&mut s.sample_pdf, n),
-            eta: grow(&mut s.eta, n),
-            roughness: grow(&mut s.roughness, n),
-            events: Some(grow(&mut s.events, n)),
+            wi: rows3(&mut c.wi, m),
+            value: rows3(&mut c.value, m),
+            pdf: grow(&mut c.pdf, m),
+            eta: grow(&mut c.eta, m),
+            roughness: grow(&mut c.roughness, m),
+            events: Some(grow(&mut c.events, m)),
             closure: None,
-            only: Some((&s.chosen[..n], k as f32)),
+            only: None,
             out_of_range: false,
         };
         l.lobe.sample_lanes(kernels, &mut job);
         if job.out_of_range {
             return false;
         }
+        let rows = c.wi.iter().zip(wi.iter_mut());
+        for (src, dst) in rows.chain(c.value.iter().zip(own_value.iter_mut())) {
+            scatter_compact(index, src, dst);
+        }
+        scatter_compact(index, &c.pdf, own_pdf);
+        scatter_compact(index, &c.eta, eta);
+        scatter_compact(index, &c.roughness, roughness);
+        scatter_compact(index, &c.events, events);
     }
     // The mixture: the chosen lobe's own value and pdf, the other lobes' added.
     rows3(&mut s.value, n);
@@ -1082,6 +1121,13 @@ fn mixture_in_place(
     };
     finish_mixture(kernels, &mut job);
     true
+}
+
+/// `dst[index[i]] = src[i]`.
+fn scatter_compact<T: Copy>(index: &[u32], src: &[T], dst: &mut [T]) {
+    for (&j, &v) in index.iter().zip(src) {
+        dst[j as usize] = v;
+    }
 }
 
 /// The closure's sample of scratch lane `j`, from the chosen lobe `k`'s sample rows

@@ -471,6 +471,22 @@ pub(super) struct Scratch {
     /// A material batch's chunk: its active lanes and its slots' rows.
     pub chunk: Vec<u32>,
     pub material: super::material::SlotRows,
+    pub compact: Compact,
+}
+
+/// The lanes of an in-place mixture sample that chose one lobe, gathered so the
+/// lobe's kernel samples only them: their index in the chunk, inputs and outputs.
+#[derive(Default)]
+pub(super) struct Compact {
+    pub index: Vec<u32>,
+    pub wo: [Vec<f32>; 3],
+    pub u: [Vec<f32>; 3],
+    pub wi: [Vec<f32>; 3],
+    pub value: [Vec<f32>; 3],
+    pub pdf: Vec<f32>,
+    pub eta: Vec<f32>,
+    pub roughness: Vec<f32>,
+    pub events: Vec<u8>,
 }
 
 impl Scratch {
@@ -482,6 +498,10 @@ impl Scratch {
             &mut self.u,
             &mut self.value,
             &mut self.sample_value,
+            &mut self.compact.wo,
+            &mut self.compact.u,
+            &mut self.compact.wi,
+            &mut self.compact.value,
         ] {
             for row in rows {
                 reserve(row, len)?;
@@ -493,9 +513,14 @@ impl Scratch {
             &mut self.eta,
             &mut self.roughness,
             &mut self.chosen,
+            &mut self.compact.pdf,
+            &mut self.compact.eta,
+            &mut self.compact.roughness,
         ] {
             reserve(row, len)?;
         }
+        reserve(&mut self.compact.index, len)?;
+        reserve(&mut self.compact.events, len)?;
         reserve(&mut self.events, len)
     }
 
