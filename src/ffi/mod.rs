@@ -224,6 +224,23 @@ unsafe fn out_struct<'a, T: Output>(p: *mut T, what: &str) -> Result<&'a mut T, 
     Ok(s)
 }
 
+/// A `struct_size` is the oldest version's `min_size` or at least this library's
+/// `size_of::<T>()`: a size between them would cut an appended field in two.
+fn check_version<T>(size: u32, min_size: usize, what: &str) -> Result<(), Error> {
+    let size = size as usize;
+    if size == min_size || size >= std::mem::size_of::<T>() {
+        return Ok(());
+    }
+    Err(Error::new(
+        Status::StructSize,
+        format!(
+            "{what}.struct_size is {size}: this library takes {min_size} (an older \
+             version) or at least {}",
+            std::mem::size_of::<T>()
+        ),
+    ))
+}
+
 /// A caller's output struct that may be an older, shorter version of `T` (a field
 /// appended since): written whole into a copy, then its first `size` bytes.
 struct VersionedOut<T> {
@@ -248,8 +265,8 @@ impl<T> VersionedOut<T> {
     }
 }
 
-/// Output pointer to a struct that begins with `struct_size` and is at least
-/// `min_size` bytes (its oldest version), set to its failure state before the call
+/// Output pointer to a struct that begins with `struct_size` and is `min_size` bytes
+/// (its oldest version) or the whole `T` ([`check_version`]), set to its failure state before the call
 /// does anything else (a NULL or too small struct is not written).
 ///
 /// # Safety
@@ -264,9 +281,7 @@ unsafe fn out_versioned<T: Output>(
     }
     // SAFETY: every version begins with `struct_size` (per the contract).
     let size = unsafe { p.cast::<u32>().read() };
-    if (size as usize) < min_size {
-        return Err(struct_size_error(size, min_size, what));
-    }
+    check_version::<T>(size, min_size, what)?;
     let out = VersionedOut {
         p,
         struct_size: size,
@@ -276,8 +291,8 @@ unsafe fn out_versioned<T: Output>(
     Ok(out)
 }
 
-/// An argument struct that may be an older, shorter version of `T` (at least
-/// `min_size` bytes): the caller's `struct_size` bytes over a zeroed `T`, so fields
+/// An argument struct that may be an older, shorter version of `T` (`min_size`
+/// bytes, [`check_version`]): the caller's `struct_size` bytes over a zeroed `T`, so fields
 /// appended since read as NULL or 0.
 ///
 /// # Safety
@@ -289,9 +304,7 @@ unsafe fn args_versioned<T: Copy>(p: *const T, min_size: usize, what: &str) -> R
     }
     // SAFETY: every version begins with `struct_size` (per the contract).
     let size = unsafe { p.cast::<u32>().read() };
-    if (size as usize) < min_size {
-        return Err(struct_size_error(size, min_size, what));
-    }
+    check_version::<T>(size, min_size, what)?;
     let mut args = std::mem::MaybeUninit::<T>::zeroed();
     // SAFETY: the caller's struct holds `size` bytes, the copy at most `size_of::<T>()`
     // of them; a zeroed `T` with any prefix of a valid `T` over it is valid (contract).
