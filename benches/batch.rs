@@ -89,6 +89,7 @@ fn sample(exec: &Exec<'_>, closure: &Closure, l: &mut Lanes) {
         value: None,
         flags: None,
         lobe: None,
+        component: None,
         eta: None,
         roughness: None,
     };

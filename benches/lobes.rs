@@ -1,9 +1,11 @@
 //! Scalar eval and sample per registered lobe (default parameters, local frame),
-//! and a whole-closure eval through the Rust API. Run: `cargo bench --bench lobes`.
+//! a whole-closure eval through the Rust API, and the `wo` bake (a conductor
+//! mirror's Fresnel) read and missed. Run: `cargo bench --bench lobes`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glint::Closure;
 use glint::lobes::Transport;
-use glint::math::Vec3;
+use glint::math::{Frame, Vec3};
 use glint::params;
 use glint::registry::Registry;
 use std::hint::black_box;
@@ -92,5 +94,61 @@ fn closure(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, lobes, closure);
+/// A polished metal (lambert + a conductor mirror) built at each `wo`: the mirror
+/// bakes `F(cos_o)`. Its samples at the baked `wo` read the bake; at another `wo`
+/// they compute it, as every sample did before baking. Per shading point, a build
+/// with `wo` (bake, then the selection albedo reads it) plus one sample against a
+/// build without `wo` (selection albedo and sample each evaluate a Fresnel, the
+/// count of a build with `wo` before baking).
+fn baked(c: &mut Criterion) {
+    let registry = Registry::with_builtins();
+    let Inputs { wo, wi, u } = inputs();
+    let (lambert, mirror) = (
+        registry.find("lambert").unwrap(),
+        registry.find("mirror").unwrap(),
+    );
+    let mirror_type = registry.get(mirror).unwrap();
+    let mut conductor = vec![0.0; params::block_size(mirror_type.params())];
+    params::write_defaults(mirror_type.params(), &mut conductor);
+    // The Fresnel choice is the mirror's first parameter: 1 = conductor.
+    conductor[0] = 1.0;
+    let frame = Frame::new(Vec3::new(0.0, 0.0, 1.0), None);
+    let build = |wo: Option<Vec3<f32>>| {
+        let mut c = Closure::new(wo, Transport::Radiance);
+        c.add_lobe(&registry, lambert, [0.2; 3], frame, None)
+            .unwrap();
+        c.add_lobe(&registry, mirror, [1.0; 3], frame, Some(&conductor))
+            .unwrap();
+        c.finish().unwrap();
+        c
+    };
+    let closures: Vec<_> = wo.iter().map(|&w| build(Some(w))).collect();
+    let mut group = c.benchmark_group("baked_mirror_conductor");
+    group.throughput(Throughput::Elements(N as u64));
+    for (name, at) in [("sample_at_baked_wo", &wo), ("sample_at_other_wo", &wi)] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                for i in 0..N {
+                    black_box(closures[i].sample_lobe(1, at[i], u[i]).ok());
+                }
+            })
+        });
+    }
+    for (name, with_wo) in [
+        ("build_sample_baked", true),
+        ("build_sample_unbaked", false),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                for i in 0..N {
+                    let c = build(with_wo.then_some(wo[i]));
+                    black_box(c.sample(wo[i], u[i]).ok());
+                }
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, lobes, closure, baked);
 criterion_main!(benches);

@@ -77,6 +77,7 @@ fn sample_output(l: &mut Lanes) -> (SampleRandoms<'_>, SampleOutput<'_>) {
             value: None,
             flags: None,
             lobe: None,
+            component: None,
             eta: None,
             roughness: None,
         },

@@ -82,7 +82,7 @@ static glint_status run_batch(lanes *l, size_t count, int which)
                                  l->wo_x, l->wo_y, l->wo_z, l->u_lobe, l->u0, l->u1,
                                  l->s_wi_x, l->s_wi_y, l->s_wi_z, l->s_pdf,
                                  l->weight_r, l->weight_g, l->weight_b,
-                                 NULL, NULL, NULL, l->flags, NULL, NULL, NULL};
+                                 NULL, NULL, NULL, l->flags, NULL, NULL, NULL, NULL};
     switch (which) {
     case 0:
         return glint_eval_batch(&e);

@@ -199,6 +199,12 @@ typedef struct glint_sample_batch_args {
   uint32_t *lobe;
   float *eta;
   float *roughness;
+  /*
+   Optional: the component (sub-lobe) of each sample, 0 for failed lanes
+   (`glint_sample_result.component`). Appended: a caller built against a header
+   without it passes its smaller `struct_size`, and nothing is written here.
+   */
+  uint32_t *component;
 } glint_sample_batch_args;
 
 /*
@@ -329,6 +335,12 @@ typedef struct glint_material_sample_batch_args {
   uint32_t *lobe;
   float *eta;
   float *roughness;
+  /*
+   Optional: the component (sub-lobe) of each sample, 0 for failed lanes
+   (`glint_sample_result.component`). Appended: a caller built against a header
+   without it passes its smaller `struct_size`, and nothing is written here.
+   */
+  uint32_t *component;
 } glint_material_sample_batch_args;
 
 /*
@@ -420,6 +432,12 @@ typedef struct glint_sample_result {
    Roughness of the sampled lobe in [0, 1] (0 for specular).
    */
   float roughness;
+  /*
+   The component (sub-lobe) of the sampled lobe: a `dielectric`'s reflection 0,
+   transmission 1; 0 for lobes of one component. Appended: a caller built against
+   a header without it passes its smaller `struct_size` and gets the fields it has.
+   */
+  uint32_t component;
 } glint_sample_result;
 
 /*

@@ -211,6 +211,7 @@ fn run_with<'a>(
             value: Some(soa_mut(&mut o.s_value)),
             flags: Some(&mut o.s_flags),
             lobe: Some(&mut o.s_lobe),
+            component: None,
             eta: Some(&mut o.s_eta),
             roughness: Some(&mut o.s_roughness),
         },

@@ -83,6 +83,7 @@ fn samples_carry_the_eval_at_their_direction() {
                 value: Some(soa_mut(&mut value)),
                 flags: Some(&mut flags),
                 lobe: None,
+                component: None,
                 eta: None,
                 roughness: None,
             },

@@ -325,6 +325,7 @@ impl Outputs {
             value: Some(soa_mut(&mut o.s_value)),
             flags: Some(&mut o.s_flags),
             lobe: None,
+            component: None,
             eta: None,
             roughness: None,
         };

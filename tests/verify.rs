@@ -119,6 +119,8 @@ impl LobeType for Broken {
             delta: false,
             eta: 1.0,
             roughness: 1.0,
+            class: flags::DIFFUSE as f32,
+            component: 0.0,
         }
     }
     fn albedo(&self, _p: &[f32], wo: Vec3<f32>, _mode: Transport) -> Rgb<f32> {

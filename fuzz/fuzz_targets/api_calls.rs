@@ -727,6 +727,7 @@ impl State {
                     },
                     eta: opt(8, o7.as_mut_ptr()),
                     roughness: opt(16, o8.as_mut_ptr()),
+                    component: null_mut(),
                 };
                 // SAFETY: as above.
                 let st = unsafe { glint_sample_batch(&args) };

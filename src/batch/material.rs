@@ -911,7 +911,7 @@ fn sample_chunk(
             SampleResult::FAILED
         } else {
             let p = s.material.probability[k * len + j];
-            finish_lane(s, j, k, p, true, slots[k].1.flags())
+            finish_lane(s, j, k, p, true)
         };
         out.write(at, &r);
     }

@@ -18,11 +18,10 @@ mod stage;
 
 use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
+use crate::kernels::{AlbedoJob, ClosureRows, Directions, EvalJob, LobeLanes, SampleJob, mixture};
 use crate::kernels::{
-    AlbedoJob, ClosureRows, Directions, EVENT_DELTA, EVENT_TRANSMITTED, EVENT_VALID, EvalJob,
-    LobeLanes, SampleJob, mixture,
+    FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize, unpack_events,
 };
-use crate::kernels::{FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize};
 use crate::lobes::Sample;
 use crate::math::{Rgb, Vec3};
 use crate::simd::Kernels;
@@ -819,6 +818,7 @@ pub struct SampleOutput<'a> {
     pub value: Option<Soa3Mut<'a>>,
     pub flags: Option<&'a mut [u32]>,
     pub lobe: Option<&'a mut [u32]>,
+    pub component: Option<&'a mut [u32]>,
     pub eta: Option<&'a mut [f32]>,
     pub roughness: Option<&'a mut [f32]>,
 }
@@ -831,6 +831,7 @@ impl SplitLanes for SampleOutput<'_> {
         let (value, value2) = self.value.split_lanes(lanes);
         let (flags, flags2) = self.flags.split_lanes(lanes);
         let (lobe, lobe2) = self.lobe.split_lanes(lanes);
+        let (component, component2) = self.component.split_lanes(lanes);
         let (eta, eta2) = self.eta.split_lanes(lanes);
         let (roughness, roughness2) = self.roughness.split_lanes(lanes);
         (
@@ -841,6 +842,7 @@ impl SplitLanes for SampleOutput<'_> {
                 value,
                 flags,
                 lobe,
+                component,
                 eta,
                 roughness,
             },
@@ -851,6 +853,7 @@ impl SplitLanes for SampleOutput<'_> {
                 value: value2,
                 flags: flags2,
                 lobe: lobe2,
+                component: component2,
                 eta: eta2,
                 roughness: roughness2,
             },
@@ -870,6 +873,7 @@ impl SampleOutput<'_> {
         for (len, what) in [
             (self.flags.as_ref().map(|f| f.len()), "flags"),
             (self.lobe.as_ref().map(|l| l.len()), "lobe"),
+            (self.component.as_ref().map(|k| k.len()), "component"),
             (self.eta.as_ref().map(|e| e.len()), "eta"),
             (self.roughness.as_ref().map(|r| r.len()), "roughness"),
         ] {
@@ -892,6 +896,9 @@ impl SampleOutput<'_> {
         }
         if let Some(l) = self.lobe.as_deref_mut() {
             l[i] = s.lobe;
+        }
+        if let Some(k) = self.component.as_deref_mut() {
+            k[i] = s.component;
         }
         if let Some(e) = self.eta.as_deref_mut() {
             e[i] = s.eta;
@@ -1090,15 +1097,10 @@ fn mixture_in_place(
         };
         l.lobe.eval_lanes(kernels, &mut job);
     }
-    let mut classes = [0u32; MAX_LOBES];
-    for (c, l) in classes.iter_mut().zip(closure.lobes()) {
-        *c = mixture::class_of(l.lobe.flags());
-    }
     let local = lanes.start - base..lanes.end - base;
     let mut job = FinishJob {
         len: n,
         probabilities,
-        classes: &classes[..probabilities.len()],
         chosen: &s.chosen[..n],
         wi: view3(&s.wi, n),
         own_value: view3(&s.sample_value, n),
@@ -1115,6 +1117,7 @@ fn mixture_in_place(
             value: out.value.as_mut().map(|v| rows_mut(v, &local)),
             flags: out.flags.as_deref_mut().map(|f| &mut f[local.clone()]),
             lobe: out.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
+            component: out.component.as_deref_mut().map(|k| &mut k[local.clone()]),
             eta: out.eta.as_deref_mut().map(|e| &mut e[local.clone()]),
             roughness: out.roughness.as_deref_mut().map(|r| &mut r[local.clone()]),
         },
@@ -1134,25 +1137,19 @@ fn scatter_compact<T: Copy>(index: &[u32], src: &[T], dst: &mut [T]) {
 /// (`sample_value`, `sample_pdf`, `wi`, `eta`, `roughness`, `events`) and the
 /// mixture's rows (`value`, `pdf`); `probability` is lobe `k`'s, `computed` false for
 /// a lane that failed before sampling ([`mixture::finish`]).
-fn finish_lane(
-    s: &Scratch,
-    j: usize,
-    k: usize,
-    probability: f32,
-    computed: bool,
-    lobe_flags: u32,
-) -> SampleResult {
-    let e = s.events[j];
-    let delta = e & EVENT_DELTA != 0;
+fn finish_lane(s: &Scratch, j: usize, k: usize, probability: f32, computed: bool) -> SampleResult {
+    let (valid, transmitted, delta, class, component) = unpack_events(s.events[j]);
     let sampled = Sample {
         wi: Vec3::new(s.wi[0][j], s.wi[1][j], s.wi[2][j]),
         value: Rgb::zero(),
         pdf: 0.0,
-        valid: computed && e & EVENT_VALID != 0,
-        transmitted: e & EVENT_TRANSMITTED != 0,
+        valid: computed && valid,
+        transmitted,
         delta,
         eta: s.eta[j],
         roughness: s.roughness[j],
+        class,
+        component,
     };
     let row = |rows: &[Vec<f32>; 3]| Rgb::new(rows[0][j], rows[1][j], rows[2][j]);
     let own = (row(&s.sample_value), s.sample_pdf[j]);
@@ -1163,8 +1160,9 @@ fn finish_lane(
         value: c.value,
         pdf: c.pdf,
         weight: c.weight,
-        flags: mixture::flags(&c, mixture::class_of(lobe_flags))[0],
+        flags: mixture::flags(&c)[0],
         lobe: if c.ok { k as u32 } else { 0 },
+        component: mixture::components(&c)[0],
         eta: c.eta,
         roughness: c.roughness,
     }
@@ -1216,7 +1214,7 @@ fn sample_in_place(
             weight: rows_mut(&mut out.weight, &local),
             flags: out.flags.as_deref_mut().map(|f| &mut f[local.clone()]),
             lobe: out.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
-            class: mixture::class_of(lobe.flags()),
+            component: out.component.as_deref_mut().map(|k| &mut k[local.clone()]),
         }),
         only: None,
         out_of_range: false,
@@ -1294,16 +1292,16 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
             eval_lobes(kernels, input, s, g, closure, Some(k), true, false);
         }
         let group = &s.groups.groups()[g];
-        let lobe_flags = lobe.flags();
         grow(&mut s.flags, len);
         grow(&mut s.lobe_index, len);
+        grow(&mut s.component, len);
         for (j, &lane) in group.lanes.iter().enumerate() {
             let c = input
                 .closures
                 .closure(lane as usize)
                 .expect("resolved before");
             let p = c.lobes()[k].probability;
-            let r = finish_lane(s, j, k, p, s.failed[j] == 0, lobe_flags);
+            let r = finish_lane(s, j, k, p, s.failed[j] == 0);
             for (c, v) in [r.wi.x, r.wi.y, r.wi.z].into_iter().enumerate() {
                 s.wi[c][j] = v;
             }
@@ -1320,8 +1318,9 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
             (s.pdf[j], s.eta[j], s.roughness[j]) = (r.pdf, r.eta, r.roughness);
             s.flags[j] = r.flags;
             s.lobe_index[j] = r.lobe;
+            s.component[j] = r.component;
         }
-        let (sample_flags, lobe_index) = (&s.flags, &s.lobe_index);
+        let (sample_flags, lobe_index, component) = (&s.flags, &s.lobe_index, &s.component);
         let scatter = Scatter::new(&group.lanes, base, &s.failed, false);
         scatter.rows(&s.wi, [&mut *out.wi.x, &mut *out.wi.y, &mut *out.wi.z]);
         scatter.row(&s.pdf, out.pdf);
@@ -1337,6 +1336,9 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
         }
         if let Some(l) = out.lobe.as_deref_mut() {
             scatter.row(lobe_index, l);
+        }
+        if let Some(k) = out.component.as_deref_mut() {
+            scatter.row(component, k);
         }
         if let Some(e) = out.eta.as_deref_mut() {
             scatter.row(&s.eta, e);

@@ -463,9 +463,11 @@ pub(super) struct Scratch {
     pub sample_pdf: Vec<f32>,
     pub eta: Vec<f32>,
     pub roughness: Vec<f32>,
-    pub events: Vec<u8>,
+    /// Packed events, class and component (`kernels::pack_events`).
+    pub events: Vec<f32>,
     pub flags: Vec<u32>,
     pub lobe_index: Vec<u32>,
+    pub component: Vec<u32>,
     /// The lobe each lane of an in-place mixture sample chose, as a float index.
     pub chosen: Vec<f32>,
     /// A material batch's chunk: its active lanes and its slots' rows.
@@ -486,7 +488,7 @@ pub(super) struct Compact {
     pub pdf: Vec<f32>,
     pub eta: Vec<f32>,
     pub roughness: Vec<f32>,
-    pub events: Vec<u8>,
+    pub events: Vec<f32>,
 }
 
 impl Scratch {
@@ -513,15 +515,15 @@ impl Scratch {
             &mut self.eta,
             &mut self.roughness,
             &mut self.chosen,
+            &mut self.events,
             &mut self.compact.pdf,
             &mut self.compact.eta,
             &mut self.compact.roughness,
+            &mut self.compact.events,
         ] {
             reserve(row, len)?;
         }
-        reserve(&mut self.compact.index, len)?;
-        reserve(&mut self.compact.events, len)?;
-        reserve(&mut self.events, len)
+        reserve(&mut self.compact.index, len)
     }
 
     /// Reserve every buffer a group of `len` lanes of `closure`'s shape needs, then
@@ -541,6 +543,7 @@ impl Scratch {
         reserve(&mut self.failed, len)?;
         reserve(&mut self.flags, len)?;
         reserve(&mut self.lobe_index, len)?;
+        reserve(&mut self.component, len)?;
         for row in rows3(&mut self.value, len) {
             row.fill(0.0);
         }

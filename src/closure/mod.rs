@@ -60,8 +60,11 @@ pub struct SampleResult {
     pub value: Rgb<f32>,
     pub pdf: f32,
     pub weight: Rgb<f32>,
+    /// `GLINT_FLAG_*`: the side and the sample's class.
     pub flags: u32,
     pub lobe: u32,
+    /// The component (sub-lobe) of the sampled lobe ([`crate::lobes::Sample`]).
+    pub component: u32,
     pub eta: f32,
     pub roughness: f32,
 }
@@ -88,6 +91,7 @@ impl SampleResult {
         },
         flags: 0,
         lobe: 0,
+        component: 0,
         eta: 1.0,
         roughness: 0.0,
     };
@@ -279,6 +283,9 @@ impl Closure {
             None => params::write_defaults(specs, block),
         }
         lobe.decode(block, decoded);
+        if let Some(wo) = self.wo {
+            lobe.bake(decoded, frame.to_local(wo), self.mode);
+        }
         self.lobes.push(LobeInstance {
             lobe: lobe.clone(),
             type_id,
@@ -561,8 +568,9 @@ impl Closure {
             value,
             pdf,
             weight: c.weight,
-            flags: mixture::flags(&c, mixture::class_of(l.lobe.flags()))[0],
+            flags: mixture::flags(&c)[0],
             lobe: k as u32,
+            component: mixture::components(&c)[0],
             eta: s.eta,
             roughness: s.roughness,
         })

@@ -97,6 +97,10 @@ pub struct glint_sample_batch_args {
     pub lobe: *mut u32,
     pub eta: *mut f32,
     pub roughness: *mut f32,
+    /// Optional: the component (sub-lobe) of each sample, 0 for failed lanes
+    /// (`glint_sample_result.component`). Appended: a caller built against a header
+    /// without it passes its smaller `struct_size`, and nothing is written here.
+    pub component: *mut u32,
 }
 
 /// Arguments of `glint_albedo_batch`.
@@ -116,6 +120,12 @@ pub struct glint_albedo_batch_args {
     pub albedo_g: *mut f32,
     pub albedo_b: *mut f32,
 }
+
+/// `sizeof(glint_sample_batch_args)` before `component`: the oldest size accepted.
+const SAMPLE_ARGS_V1_SIZE: usize = std::mem::offset_of!(glint_sample_batch_args, component);
+/// The same for `glint_material_sample_batch_args`.
+const MATERIAL_SAMPLE_ARGS_V1_SIZE: usize =
+    std::mem::offset_of!(glint_material_sample_batch_args, component);
 
 /// The fields every batch argument struct shares.
 struct CommonArgs {
@@ -408,9 +418,8 @@ pub unsafe extern "C" fn glint_pdf_batch(args: *const glint_pdf_batch_args) -> g
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_sample_batch(args: *const glint_sample_batch_args) -> glint_status {
     guard(|| {
-        // SAFETY: per the contract.
-        let a = unsafe { deref(args, "args") }?;
-        check_size(a, "args")?;
+        // SAFETY: per the contract; the struct holds integers and raw pointers only.
+        let a = &unsafe { args_versioned(args, SAMPLE_ARGS_V1_SIZE, "args") }?;
         let n = a.count;
         // SAFETY: the struct's pointers are valid for `count` elements per the contract.
         unsafe {
@@ -432,6 +441,7 @@ pub unsafe extern "C" fn glint_sample_batch(args: *const glint_sample_batch_args
                 value,
                 flags: optional(a.flags, n),
                 lobe: optional(a.lobe, n),
+                component: optional(a.component, n),
                 eta: optional(a.eta, n),
                 roughness: optional(a.roughness, n),
             };
@@ -561,6 +571,10 @@ pub struct glint_material_sample_batch_args {
     pub lobe: *mut u32,
     pub eta: *mut f32,
     pub roughness: *mut f32,
+    /// Optional: the component (sub-lobe) of each sample, 0 for failed lanes
+    /// (`glint_sample_result.component`). Appended: a caller built against a header
+    /// without it passes its smaller `struct_size`, and nothing is written here.
+    pub component: *mut u32,
 }
 
 /// Arguments of `glint_material_albedo_batch`.
@@ -587,7 +601,6 @@ macro_rules! sized {
 sized!(
     glint_material_eval_batch_args,
     glint_material_pdf_batch_args,
-    glint_material_sample_batch_args,
     glint_material_albedo_batch_args
 );
 
@@ -712,9 +725,8 @@ pub unsafe extern "C" fn glint_material_sample_batch(
     args: *const glint_material_sample_batch_args,
 ) -> glint_status {
     guard(|| {
-        // SAFETY: per the contract.
-        let a = unsafe { deref(args, "args") }?;
-        check_size(a, "args")?;
+        // SAFETY: per the contract; the struct holds integers and raw pointers only.
+        let a = &unsafe { args_versioned(args, MATERIAL_SAMPLE_ARGS_V1_SIZE, "args") }?;
         let n = a.lanes.count;
         let mut overrides = Vec::new();
         // SAFETY: the struct's pointers are valid for `count` elements per the contract.
@@ -737,6 +749,7 @@ pub unsafe extern "C" fn glint_material_sample_batch(
                 value,
                 flags: optional(a.flags, n),
                 lobe: optional(a.lobe, n),
+                component: optional(a.component, n),
                 eta: optional(a.eta, n),
                 roughness: optional(a.roughness, n),
             };

@@ -158,7 +158,15 @@ pub struct glint_sample_result {
     pub eta: f32,
     /// Roughness of the sampled lobe in [0, 1] (0 for specular).
     pub roughness: f32,
+    /// The component (sub-lobe) of the sampled lobe: a `dielectric`'s reflection 0,
+    /// transmission 1; 0 for lobes of one component. Appended: a caller built against
+    /// a header without it passes its smaller `struct_size` and gets the fields it has.
+    pub component: u32,
 }
+
+/// `sizeof(glint_sample_result)` before `component` was appended: the oldest size
+/// the sample calls accept.
+const SAMPLE_RESULT_V1_SIZE: usize = std::mem::offset_of!(glint_sample_result, component);
 
 impl Sized32 for glint_sample_result {
     fn struct_size(&self) -> u32 {
@@ -585,8 +593,8 @@ fn write_eval(out: &mut glint_eval_result, r: EvalResult) {
     };
 }
 
-fn write_sample(out: &mut glint_sample_result, s: SampleResult) {
-    *out = glint_sample_result {
+fn write_sample(out: VersionedOut<glint_sample_result>, s: SampleResult) {
+    out.write(glint_sample_result {
         struct_size: out.struct_size,
         wi: vec3_out(s.wi),
         value: s.value.to_array(),
@@ -596,7 +604,8 @@ fn write_sample(out: &mut glint_sample_result, s: SampleResult) {
         lobe: s.lobe,
         eta: s.eta,
         roughness: s.roughness,
-    };
+        component: s.component,
+    });
 }
 
 /// The 3 floats at `out`, zeroed (the failure state) before the call does anything else.
@@ -684,7 +693,7 @@ pub unsafe extern "C" fn glint_sample(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { out_struct(out, "result") }?;
+        let out = unsafe { out_versioned(out, SAMPLE_RESULT_V1_SIZE, "result") }?;
         // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
         write_sample(out, c.sample(vec3_in(wo, "wo")?, [u_lobe, u0, u1])?);
@@ -806,7 +815,7 @@ pub unsafe extern "C" fn glint_sample_lobe(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { out_struct(out, "result") }?;
+        let out = unsafe { out_versioned(out, SAMPLE_RESULT_V1_SIZE, "result") }?;
         // SAFETY: per the contract.
         let c = unsafe { closure_ref(closure) }?;
         write_sample(

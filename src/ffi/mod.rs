@@ -224,6 +224,100 @@ unsafe fn out_struct<'a, T: Output>(p: *mut T, what: &str) -> Result<&'a mut T, 
     Ok(s)
 }
 
+/// A `struct_size` is the oldest version's `min_size` or at least this library's
+/// `size_of::<T>()`: a size between them would cut an appended field in two.
+fn check_version<T>(size: u32, min_size: usize, what: &str) -> Result<(), Error> {
+    let size = size as usize;
+    if size == min_size || size >= std::mem::size_of::<T>() {
+        return Ok(());
+    }
+    Err(Error::new(
+        Status::StructSize,
+        format!(
+            "{what}.struct_size is {size}: this library takes {min_size} (an older \
+             version) or at least {}",
+            std::mem::size_of::<T>()
+        ),
+    ))
+}
+
+/// A caller's output struct that may be an older, shorter version of `T` (a field
+/// appended since): written whole into a copy, then its first `size` bytes.
+struct VersionedOut<T> {
+    p: *mut T,
+    struct_size: u32,
+    /// The caller's `struct_size`, at most `size_of::<T>()`.
+    size: usize,
+}
+
+impl<T> VersionedOut<T> {
+    fn write(&self, value: T) {
+        // SAFETY: `out_versioned` checked `p` and the caller's contract gives `size`
+        // writable bytes there; `value` holds at least `size` bytes, and the structs
+        // this serves are 4-byte fields without padding.
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                (&value as *const T).cast::<u8>(),
+                self.p.cast::<u8>(),
+                self.size,
+            );
+        }
+    }
+}
+
+/// Output pointer to a struct that begins with `struct_size` and is `min_size` bytes
+/// (its oldest version) or the whole `T` ([`check_version`]), set to its failure state before the call
+/// does anything else (a NULL or too small struct is not written).
+///
+/// # Safety
+/// `p` is NULL or points to `struct_size` writable bytes, not accessed elsewhere.
+unsafe fn out_versioned<T: Output>(
+    p: *mut T,
+    min_size: usize,
+    what: &str,
+) -> Result<VersionedOut<T>, Error> {
+    if p.is_null() {
+        return Err(null(what));
+    }
+    // SAFETY: every version begins with `struct_size` (per the contract).
+    let size = unsafe { p.cast::<u32>().read() };
+    check_version::<T>(size, min_size, what)?;
+    let out = VersionedOut {
+        p,
+        struct_size: size,
+        size: (size as usize).min(std::mem::size_of::<T>()),
+    };
+    out.write(T::failed(size));
+    Ok(out)
+}
+
+/// An argument struct that may be an older, shorter version of `T` (`min_size`
+/// bytes, [`check_version`]): the caller's `struct_size` bytes over a zeroed `T`, so fields
+/// appended since read as NULL or 0.
+///
+/// # Safety
+/// `p` is NULL or points to `struct_size` readable bytes; an all-zero `T` is valid
+/// (integers and raw pointers only).
+unsafe fn args_versioned<T: Copy>(p: *const T, min_size: usize, what: &str) -> Result<T, Error> {
+    if p.is_null() {
+        return Err(null(what));
+    }
+    // SAFETY: every version begins with `struct_size` (per the contract).
+    let size = unsafe { p.cast::<u32>().read() };
+    check_version::<T>(size, min_size, what)?;
+    let mut args = std::mem::MaybeUninit::<T>::zeroed();
+    // SAFETY: the caller's struct holds `size` bytes, the copy at most `size_of::<T>()`
+    // of them; a zeroed `T` with any prefix of a valid `T` over it is valid (contract).
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            p.cast::<u8>(),
+            args.as_mut_ptr().cast::<u8>(),
+            (size as usize).min(std::mem::size_of::<T>()),
+        );
+        Ok(args.assume_init())
+    }
+}
+
 /// Output pointer, set to `failed` (what a failing call leaves) before the call does
 /// anything else.
 ///

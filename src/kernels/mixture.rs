@@ -86,6 +86,10 @@ pub struct ClosureSample<L: Lane> {
     pub delta: L::Mask,
     pub eta: L,
     pub roughness: L,
+    /// The chosen lobe's sample class (`flags::DIFFUSE`, `GLOSSY`, `SPECULAR`) and
+    /// component ([`Sample`]); 0 on failed lanes.
+    pub class: L,
+    pub component: L,
 }
 
 /// The closure's sample from the chosen lobe's sample `s` (world-space `wi`) and the
@@ -114,34 +118,33 @@ pub fn finish<L: Lane>(s: &Sample<L>, value: Rgb<L>, pdf: L) -> ClosureSample<L>
         delta: s.delta & ok,
         eta: L::select(ok, s.eta, L::one()),
         roughness: L::select(ok, s.roughness, zero),
+        class: L::select(ok, s.class, zero),
+        component: L::select(ok, s.component, zero),
     }
 }
 
-/// The `GLINT_FLAG_*` bits of each lane of `c`, whose lobe type's class flags
-/// (`DIFFUSE` / `GLOSSY`) are `class`: reflection or transmission, and specular or
-/// the class; 0 for failed lanes.
+/// The `GLINT_FLAG_*` bits of each lane of `c`: reflection or transmission, and the
+/// sample's class; 0 for failed lanes.
 #[inline(always)]
-pub fn flags<L: Lane>(c: &ClosureSample<L>, class: u32) -> [u32; MAX_LANES] {
-    // In float lanes: the side bits (1, 2) and the kind bits (4, 8, 16) are disjoint,
+pub fn flags<L: Lane>(c: &ClosureSample<L>) -> [u32; MAX_LANES] {
+    // In float lanes: the side bits (1, 2) and the class bits (4, 8, 16) are disjoint,
     // so their sum is their union, and every value is exact.
     let side = L::select(
         c.transmitted,
         L::splat(flags::TRANSMISSION as f32),
         L::splat(flags::REFLECTION as f32),
     );
-    let kind = L::select(
-        c.delta,
-        L::splat(flags::SPECULAR as f32),
-        L::splat(class as f32),
-    );
     let mut lanes = [0.0f32; MAX_LANES];
-    L::select(c.ok, side + kind, L::zero()).store(&mut lanes);
+    L::select(c.ok, side + c.class, L::zero()).store(&mut lanes);
     lanes.map(|f| f as u32)
 }
 
-/// The class flags of a lobe type: its `DIFFUSE` and `GLOSSY` bits.
-pub fn class_of(lobe_flags: u32) -> u32 {
-    lobe_flags & (flags::DIFFUSE | flags::GLOSSY)
+/// The component of each lane of `c` (0 for failed lanes).
+#[inline(always)]
+pub fn components<L: Lane>(c: &ClosureSample<L>) -> [u32; MAX_LANES] {
+    let mut lanes = [0.0f32; MAX_LANES];
+    c.component.store(&mut lanes);
+    lanes.map(|k| k as u32)
 }
 
 #[cfg(test)]
@@ -158,6 +161,8 @@ mod tests {
             delta: false,
             eta: 1.5,
             roughness: 0.3,
+            class: flags::GLOSSY as f32,
+            component: 1.0,
         }
     }
 
@@ -176,29 +181,27 @@ mod tests {
             let c = finish(&sample(true), value, pdf);
             assert!(!c.ok, "{value:?} / {pdf}");
             assert_eq!((c.pdf, c.eta, c.roughness), (0.0, 1.0, 0.0));
-            assert_eq!(flags(&c, flags::GLOSSY)[0], 0);
+            assert_eq!((flags(&c)[0], components(&c)[0]), (0, 0));
         }
         let c = finish(&sample(false), v, 1.0);
         assert!(!c.ok && c.weight.to_array() == [0.0; 3]);
     }
 
     #[test]
-    fn flags_name_the_side_and_the_class() {
+    fn flags_name_the_side_and_the_sample_class() {
         let c = finish(&sample(true), Rgb::splat(0.5), 1.0);
-        assert_eq!(
-            flags(&c, flags::GLOSSY)[0],
-            flags::TRANSMISSION | flags::GLOSSY
-        );
+        assert_eq!(flags(&c)[0], flags::TRANSMISSION | flags::GLOSSY);
+        assert_eq!(components(&c)[0], 1);
         let delta = Sample {
             delta: true,
             transmitted: false,
+            class: flags::SPECULAR as f32,
+            component: 0.0,
             ..sample(true)
         };
         let c = finish(&delta, Rgb::splat(0.5), 1.0);
-        assert_eq!(
-            flags(&c, flags::GLOSSY)[0],
-            flags::REFLECTION | flags::SPECULAR
-        );
+        assert_eq!(flags(&c)[0], flags::REFLECTION | flags::SPECULAR);
+        assert_eq!(components(&c)[0], 0);
     }
 
     #[test]

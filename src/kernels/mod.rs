@@ -27,10 +27,47 @@ pub const MAX_LOBE_PARAMS: usize = 64;
 /// Lanes every staged row is padded to a multiple of (the widest register).
 pub const LANE_MULTIPLE: usize = MAX_LANES;
 
-/// `SampleJob::events` bits.
-pub const EVENT_VALID: u8 = 1;
-pub const EVENT_TRANSMITTED: u8 = 2;
-pub const EVENT_DELTA: u8 = 4;
+/// `SampleJob::events`: one float-exact integer per lane ([`pack_events`]), the
+/// `EVENT_*` bits plus the sample's class bit (`flags::DIFFUSE`, `GLOSSY`,
+/// `SPECULAR`) times `EVENT_CLASS` plus its component times `EVENT_COMPONENT`
+/// (at most 7 + 28 * 8 + 65535 * 256 < 2^24).
+pub const EVENT_VALID: u32 = 1;
+pub const EVENT_TRANSMITTED: u32 = 2;
+pub const EVENT_DELTA: u32 = 4;
+pub const EVENT_CLASS: u32 = 8;
+pub const EVENT_COMPONENT: u32 = 256;
+
+/// `value` where `m`, else 0.
+#[inline(always)]
+fn where_set<L: Lane>(m: L::Mask, value: u32) -> L {
+    L::select(m, L::splat(value as f32), L::zero())
+}
+
+/// A sample's events, class and component as one lane value (see [`EVENT_VALID`]).
+#[inline(always)]
+pub fn pack_events<L: Lane>(s: &Sample<L>) -> L {
+    where_set::<L>(s.valid, EVENT_VALID)
+        + where_set::<L>(s.transmitted, EVENT_TRANSMITTED)
+        + where_set::<L>(s.delta, EVENT_DELTA)
+        + s.class * L::splat(EVENT_CLASS as f32)
+        + s.component * L::splat(EVENT_COMPONENT as f32)
+}
+
+/// What [`pack_events`] packed: `valid`, `transmitted`, `delta`, `class`, `component`.
+#[inline(always)]
+pub fn unpack_events<L: Lane>(e: L) -> (L::Mask, L::Mask, L::Mask, L, L) {
+    let component = (e * L::splat(1.0 / EVENT_COMPONENT as f32)).floor();
+    let low = e - component * L::splat(EVENT_COMPONENT as f32);
+    let class = (low * L::splat(1.0 / EVENT_CLASS as f32)).floor();
+    let bits = low - class * L::splat(EVENT_CLASS as f32);
+    (
+        event_bit(bits, EVENT_VALID),
+        event_bit(bits, EVENT_TRANSMITTED),
+        event_bit(bits, EVENT_DELTA),
+        class,
+        component,
+    )
+}
 
 /// One lobe of the closures of a group of lanes.
 #[derive(Clone, Copy)]
@@ -133,10 +170,11 @@ pub struct SampleJob<'a> {
     pub pdf: &'a mut [f32],
     pub eta: &'a mut [f32],
     pub roughness: &'a mut [f32],
-    /// `EVENT_*` bits (staged jobs), or `None` when `closure` finishes the sample.
-    pub events: Option<&'a mut [u8]>,
+    /// Packed events (staged jobs, [`pack_events`]), or `None` when `closure`
+    /// finishes the sample.
+    pub events: Option<&'a mut [f32]>,
     /// The closure's sample, when this lobe is the closure's only one (probability
-    /// 1): weight, flags and lobe index written here, failed lanes zeroed
+    /// 1): weight, flags, lobe index and component written here, failed lanes zeroed
     /// ([`mixture::finish`]).
     pub closure: Option<ClosureRows<'a>>,
     /// `(chosen, k)`: only lanes whose `chosen` lobe is `k` are written.
@@ -149,8 +187,7 @@ pub struct ClosureRows<'a> {
     pub weight: [&'a mut [f32]; 3],
     pub flags: Option<&'a mut [u32]>,
     pub lobe: Option<&'a mut [u32]>,
-    /// The lobe type's `DIFFUSE` / `GLOSSY` flags.
-    pub class: u32,
+    pub component: Option<&'a mut [u32]>,
 }
 
 /// An albedo job.
@@ -171,15 +208,14 @@ pub struct AlbedoJob<'a> {
 /// closure's outputs ([`mixture::finish`]).
 pub struct FinishJob<'a> {
     pub len: usize,
-    /// Selection probability and class flags of each lobe.
+    /// Selection probability of each lobe.
     pub probabilities: &'a [f32],
-    pub classes: &'a [u32],
     /// Lobe index per lane (as floats).
     pub chosen: &'a [f32],
     pub wi: [&'a [f32]; 3],
     pub own_value: [&'a [f32]; 3],
     pub own_pdf: &'a [f32],
-    pub events: &'a [u8],
+    pub events: &'a [f32],
     pub eta: &'a [f32],
     pub roughness: &'a [f32],
     pub value: [&'a [f32]; 3],
@@ -195,6 +231,7 @@ pub struct FinishOutput<'a> {
     pub value: Option<[&'a mut [f32]; 3]>,
     pub flags: Option<&'a mut [u32]>,
     pub lobe: Option<&'a mut [u32]>,
+    pub component: Option<&'a mut [u32]>,
     pub eta: Option<&'a mut [f32]>,
     pub roughness: Option<&'a mut [f32]>,
 }
@@ -204,22 +241,12 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
     for i in (0..job.len).step_by(L::LANES) {
         let n = L::LANES.min(job.len - i);
         let chosen = load::<L>(job.chosen, i, n, 0.0);
-        let (mut probability, mut class) = (L::zero(), L::zero());
-        for (k, (&p, &c)) in job.probabilities.iter().zip(job.classes).enumerate() {
-            let is_k = chosen.eq(L::splat(k as f32));
-            probability = L::select(is_k, L::splat(p), probability);
-            class = L::select(is_k, L::splat(c as f32), class);
+        let mut probability = L::zero();
+        for (k, &p) in job.probabilities.iter().enumerate() {
+            probability = L::select(chosen.eq(L::splat(k as f32)), L::splat(p), probability);
         }
-        let mut e = [0.0f32; MAX_LANES];
-        for (e, &x) in e.iter_mut().zip(&job.events[i..i + n]) {
-            *e = f32::from(x);
-        }
-        let e = L::load(&e);
-        let (valid, transmitted, delta) = (
-            event_bit(e, EVENT_VALID),
-            event_bit(e, EVENT_TRANSMITTED),
-            event_bit(e, EVENT_DELTA),
-        );
+        let (valid, transmitted, delta, class, component) =
+            unpack_events(load::<L>(job.events, i, n, 0.0));
         let own_value = load_rgb::<L>(job.own_value, i, n);
         let own_pdf = load::<L>(job.own_pdf, i, n, 0.0);
         let s = Sample {
@@ -231,6 +258,8 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
             delta,
             eta: load(job.eta, i, n, 1.0),
             roughness: load(job.roughness, i, n, 0.0),
+            class,
+            component,
         };
         let (value, pdf) = mixture::sampled(
             delta,
@@ -259,17 +288,13 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
         if let Some(r) = out.roughness.as_deref_mut() {
             store(c.roughness, r, i, n);
         }
-        let mut lanes = [0.0f32; MAX_LANES];
         if let Some(f) = out.flags.as_deref_mut() {
-            // The class varies per lane here; `mixture::flags` takes it as 0 and the
-            // class lanes are added (disjoint bits) where the event is not delta.
-            let kind = L::select(c.ok & !c.delta, class, L::zero());
-            let base = mixture::flags(&c, 0);
-            kind.store(&mut lanes);
-            for ((f, &b), &k) in f[i..i + n].iter_mut().zip(&base).zip(&lanes) {
-                *f = b | k as u32;
-            }
+            f[i..i + n].copy_from_slice(&mixture::flags(&c)[..n]);
         }
+        if let Some(k) = out.component.as_deref_mut() {
+            k[i..i + n].copy_from_slice(&mixture::components(&c)[..n]);
+        }
+        let mut lanes = [0.0f32; MAX_LANES];
         if let Some(l) = out.lobe.as_deref_mut() {
             L::select(c.ok, chosen, L::zero()).store(&mut lanes);
             for (l, &k) in l[i..i + n].iter_mut().zip(&lanes) {
@@ -282,8 +307,8 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
 /// Whether the `EVENT_*` bit `bit` is set in the events `e` (small integers held
 /// exactly in floats): `floor(e / bit)` is odd.
 #[inline(always)]
-fn event_bit<L: Lane>(e: L, bit: u8) -> L::Mask {
-    let shifted = (e * L::splat(1.0 / f32::from(bit))).floor();
+fn event_bit<L: Lane>(e: L, bit: u32) -> L::Mask {
+    let shifted = (e * L::splat(1.0 / bit as f32)).floor();
     (shifted - L::splat(2.0) * (shifted * L::splat(0.5)).floor()).eq(L::one())
 }
 
@@ -529,9 +554,11 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for SampleJob<'_> {
                 for (w, row) in c.weight.to_array().into_iter().zip(rows.weight.iter_mut()) {
                     store(w, row, i, n);
                 }
-                let flags = mixture::flags(&c, rows.class);
                 if let Some(f) = rows.flags.as_deref_mut() {
-                    f[i..i + n].copy_from_slice(&flags[..n]);
+                    f[i..i + n].copy_from_slice(&mixture::flags(&c)[..n]);
+                }
+                if let Some(k) = rows.component.as_deref_mut() {
+                    k[i..i + n].copy_from_slice(&mixture::components(&c)[..n]);
                 }
                 if let Some(l) = rows.lobe.as_deref_mut() {
                     l[i..i + n].fill(0);
@@ -550,17 +577,7 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for SampleJob<'_> {
         store_where(only, eta, self.eta, i, n);
         store_where(only, roughness, self.roughness, i, n);
         if let Some(events) = self.events.as_deref_mut() {
-            let (valid, transmitted, delta) =
-                (s.valid.bits(), s.transmitted.bits(), s.delta.bits());
-            let written = only.map_or(u32::MAX, |m| m.bits());
-            for (j, e) in events[i..i + n].iter_mut().enumerate() {
-                let bit = |m: u32, flag: u8| if m >> j & 1 != 0 { flag } else { 0 };
-                if written >> j & 1 != 0 {
-                    *e = bit(valid, EVENT_VALID)
-                        | bit(transmitted, EVENT_TRANSMITTED)
-                        | bit(delta, EVENT_DELTA);
-                }
-            }
+            store_where(only, pack_events(&s), events, i, n);
         }
     }
 }
@@ -780,11 +797,8 @@ pub fn sample_each_lane(
         job.pdf[i] = s.pdf;
         job.eta[i] = s.eta;
         job.roughness[i] = s.roughness;
-        let flag = |set: bool, bit: u8| if set { bit } else { 0 };
         if let Some(events) = job.events.as_deref_mut() {
-            events[i] = flag(s.valid, EVENT_VALID)
-                | flag(s.transmitted, EVENT_TRANSMITTED)
-                | flag(s.delta, EVENT_DELTA);
+            events[i] = pack_events(&s);
         }
     }
 }

@@ -18,7 +18,9 @@
 //! One-sided: 0 when either direction is below the surface.
 
 use super::fresnel_params::{self, with_fresnel_params};
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
+use super::{
+    Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
+};
 use crate::albedo_table::{FresnelNodes, ReflectionTable};
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
@@ -202,6 +204,8 @@ impl Model for Conductor {
             delta,
             eta: L::one(),
             roughness: L::select(delta, L::zero(), p.roughness),
+            class: class_of(delta, Self::FLAGS),
+            component: L::zero(),
         }
     }
 

@@ -24,7 +24,7 @@
 use super::conductor::{
     DISTRIBUTION_CHOICES, DISTRIBUTION_DECODED_LEN, decode_distribution, read_distribution,
 };
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, flags};
+use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, class_of, flags};
 use crate::albedo_table::DielectricTable;
 use crate::fresnel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
@@ -316,6 +316,9 @@ impl Model for Dielectric {
             delta: p.smooth,
             eta: etap,
             roughness: L::select(p.smooth, L::zero(), p.roughness),
+            class: class_of(p.smooth, Self::FLAGS),
+            // Reflection 0, transmission 1.
+            component: L::select(reflect, L::zero(), L::one()),
         }
     }
 

@@ -21,7 +21,9 @@
 //! (a^2)^(1 - u1)) / (1 - a^2))`), `l = reflect(v, h)`, pdf `Dr cos_h / (4 v.h)`.
 //! Albedo from `albedo_table::disney::ClearcoatTable`. One-sided.
 
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
+use super::{
+    Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
+};
 use crate::albedo_table::disney::ClearcoatTable;
 use crate::fresnel::schlick_weight_pair;
 use crate::math::{Lane, Mask, PI, Rgb, Vec3};
@@ -152,6 +154,8 @@ impl Model for DisneyClearcoat {
             eta: L::one(),
             // The width of the coat as a roughness: sqrt(alpha).
             roughness: (L::splat(0.1) + L::splat(0.001 - 0.1) * p.gloss).sqrt(),
+            class: class_of(L::Mask::splat(false), Self::FLAGS),
+            component: L::zero(),
         }
     }
 

@@ -34,7 +34,9 @@
 //! {0, 0.25, 0.5, 0.75, 1} and `cos_o` from 1e-6 to 1 (tests/lobe_disney_diffuse.rs).
 
 use super::lambert::cosine_hemisphere;
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
+use super::{
+    Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
+};
 use crate::fresnel::schlick_weight;
 use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
@@ -254,6 +256,8 @@ impl Model for DisneyDiffuse {
             delta: L::Mask::splat(false),
             eta: L::one(),
             roughness: L::one(),
+            class: class_of(L::Mask::splat(false), Self::FLAGS),
+            component: L::zero(),
         }
     }
 

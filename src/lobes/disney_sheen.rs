@@ -19,7 +19,9 @@
 //! (tests/lobe_disney_sheen.rs).
 
 use super::lambert::cosine_hemisphere;
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
+use super::{
+    Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
+};
 use crate::fresnel::schlick_weight_pair;
 use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
@@ -136,6 +138,8 @@ impl Model for DisneySheen {
             delta: L::Mask::splat(false),
             eta: L::one(),
             roughness: L::one(),
+            class: class_of(L::Mask::splat(false), Self::FLAGS),
+            component: L::zero(),
         }
     }
 

@@ -27,7 +27,9 @@
 //! bounded. Roughness 0 is alpha 0.001, glossy (Burley's clamp), not a delta lobe.
 //! Albedo: `f0 A + B` from `albedo_table::disney::SpecularTable`. One-sided.
 
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
+use super::{
+    Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
+};
 use crate::albedo_table::disney::SpecularTable;
 use crate::fresnel::schlick_weight_pair;
 use crate::math::{Lane, Mask, Rgb, Vec3};
@@ -196,6 +198,8 @@ impl Model for DisneySpecular {
             delta: L::Mask::splat(false),
             eta: L::one(),
             roughness: p.roughness,
+            class: class_of(L::Mask::splat(false), Self::FLAGS),
+            component: L::zero(),
         }
     }
 

@@ -7,7 +7,9 @@
 //! Sampling is cosine-weighted (`pdf = cos theta_i / pi`), so the sample weight is
 //! exactly `color`. Albedo is the closed form `color`. One-sided: 0 below the surface.
 
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, flags};
+use super::{
+    Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
+};
 use crate::math::{INV_PI, Lane, Mask, PI, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
 
@@ -89,6 +91,8 @@ impl Model for Lambert {
             delta: L::Mask::splat(false),
             eta: L::one(),
             roughness: L::one(),
+            class: class_of(L::Mask::splat(false), Self::FLAGS),
+            component: L::zero(),
         }
     }
 

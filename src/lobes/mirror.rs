@@ -6,10 +6,14 @@
 //! with `f0`, `f90`, `eta`, `k`, `reflectivity`, `edge_tint`).
 //!
 //! eval and pdf are 0 (delta); a sample has value `F(cos_o)`, pdf 1 (the discrete
-//! probability) and the SPECULAR flag. Albedo is exactly `F(cos_o)`. One-sided.
+//! probability) and the SPECULAR class. Albedo is exactly `F(cos_o)`. One-sided.
+//! `F(cos_o)` depends on `wo` alone: a closure built with a `wo` bakes it once
+//! (the selection albedo and every sample at that `wo` read it).
 
 use super::fresnel_params::{self, with_fresnel_params};
-use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, flags};
+use super::{
+    Eval, Model, Params, Sample, Settle, Transport, VerifyCase, baked_or, class_of, flags,
+};
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
@@ -17,9 +21,27 @@ use crate::params::{ParamSpec, offset_of};
 pub struct Mirror;
 
 const FRESNEL: usize = offset_of(Mirror::PARAMS, 0);
+/// Decoded block: the Fresnel group, then the bake: `cos_o` (NaN = unbaked) and `F(cos_o)`.
+const BAKED: usize = fresnel_params::DECODED_LEN;
 
 pub struct Prepared<L> {
     fresnel: FresnelModel<L>,
+    baked_cos: L,
+    baked_f: Rgb<L>,
+}
+
+impl<L: Lane> Prepared<L> {
+    /// `F(cos_o)`, baked or computed.
+    #[inline(always)]
+    fn fresnel(&self, cos_o: L) -> Rgb<L> {
+        baked_or(
+            cos_o,
+            self.baked_cos,
+            self.baked_f,
+            #[inline(always)]
+            || self.fresnel.eval(cos_o),
+        )
+    }
 }
 
 impl Model for Mirror {
@@ -46,16 +68,25 @@ impl Model for Mirror {
         1e-5
     }
 
-    const DECODED_LEN: usize = fresnel_params::DECODED_LEN;
+    const DECODED_LEN: usize = BAKED + 4;
 
     fn decode(params: &[f32], out: &mut [f32]) {
         fresnel_params::decode(params, FRESNEL, out);
+        out[BAKED..].fill(f32::NAN);
+    }
+
+    fn bake(decoded: &mut [f32], wo: Vec3<f32>, _mode: Transport) {
+        let f = fresnel_params::read(&Params::<f32>::new(decoded), 0).eval(wo.z);
+        decoded[BAKED] = wo.z;
+        decoded[BAKED + 1..].copy_from_slice(&f.to_array());
     }
 
     #[inline(always)]
     fn prepare<L: Lane>(decoded: Params<'_, L>) -> Prepared<L> {
         Prepared {
             fresnel: fresnel_params::read(&decoded, 0),
+            baked_cos: decoded.float(BAKED),
+            baked_f: decoded.rgb(BAKED + 1),
         }
     }
 
@@ -76,18 +107,20 @@ impl Model for Mirror {
     ) -> Sample<L> {
         Sample {
             wi: settle.settle(Vec3::new(-wo.x, -wo.y, wo.z)),
-            value: p.fresnel.eval(wo.z),
+            value: p.fresnel(wo.z),
             pdf: L::one(),
             valid: wo.z.gt(L::zero()),
             transmitted: L::Mask::splat(false),
             delta: L::Mask::splat(true),
             eta: L::one(),
             roughness: L::zero(),
+            class: class_of(L::Mask::splat(true), Self::FLAGS),
+            component: L::zero(),
         }
     }
 
     #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
-        Rgb::select(wo.z.gt(L::zero()), p.fresnel.eval(wo.z), Rgb::zero())
+        Rgb::select(wo.z.gt(L::zero()), p.fresnel(wo.z), Rgb::zero())
     }
 }

@@ -8,8 +8,14 @@
 //!
 //! Conventions (DESIGN.md): `eval` returns `f(wo, wi) |cos theta_i|` and the pdf of
 //! sampling `wi`; delta lobes return 0 from eval and pdf, and their samples carry
-//! the SPECULAR flag, `value` = the reflected or transmitted fraction and `pdf` = the
+//! the SPECULAR class, `value` = the reflected or transmitted fraction and `pdf` = the
 //! discrete probability of the chosen event.
+//!
+//! A sample reports its own class (diffuse, glossy or specular: a dielectric's
+//! sample is specular at roughness 0 and glossy above) and the component (sub-lobe)
+//! it came from; [`class_of`] gives the class from the lobe type's flags for lobes
+//! with one class. A lobe may bake what depends only on `wo` once per shading point
+//! ([`Model::bake`]).
 
 pub mod conductor;
 pub mod dielectric;
@@ -76,6 +82,28 @@ pub struct Sample<L: Lane> {
     pub eta: L,
     /// The lobe's roughness in [0, 1] (0 for delta samples), a hint for path regularization.
     pub roughness: L,
+    /// The sample's class bit, `flags::DIFFUSE`, `GLOSSY` or `SPECULAR` (the latter
+    /// exactly where `delta`), as a lane value; 0 where the sample failed.
+    pub class: L,
+    /// The component (sub-lobe) sampled, a small integer: a dielectric's reflection 0
+    /// and transmission 1; 0 for lobes of one component.
+    pub component: L,
+}
+
+/// Largest component index a sample reports (staged rows pack it beside the event
+/// bits in a float-exact integer).
+pub const MAX_COMPONENT: f32 = 65535.0;
+
+/// The class of a sample from its `delta` lanes and its lobe type's flags: SPECULAR
+/// for delta events, else the type's DIFFUSE / GLOSSY bit (a type declaring both, as
+/// a V1 plugin may, reports both).
+#[inline(always)]
+pub fn class_of<L: Lane>(delta: L::Mask, lobe_flags: u32) -> L {
+    L::select(
+        delta,
+        L::splat(flags::SPECULAR as f32),
+        L::splat((lobe_flags & (flags::DIFFUSE | flags::GLOSSY)) as f32),
+    )
 }
 
 impl<L: Lane> Sample<L> {
@@ -101,26 +129,13 @@ impl<L: Lane> Sample<L> {
             Rgb::zero(),
         );
         self.wi = Vec3::select(ok, self.wi, Vec3::new(L::zero(), L::zero(), L::zero()));
+        self.class = L::select(ok, self.class, L::zero());
+        self.component = L::select(
+            ok,
+            self.component.max(L::zero()).min(L::splat(MAX_COMPONENT)),
+            L::zero(),
+        );
         self
-    }
-
-    /// The `GLINT_FLAG_*` bits of a scalar sample of a lobe whose type flags are
-    /// `lobe_flags`: reflection or transmission, and specular or the lobe's class.
-    pub fn flags(&self, lobe_flags: u32) -> u32
-    where
-        L: Lane<Mask = bool>,
-    {
-        let side = if self.transmitted {
-            flags::TRANSMISSION
-        } else {
-            flags::REFLECTION
-        };
-        let class = if self.delta {
-            flags::SPECULAR
-        } else {
-            lobe_flags & (flags::DIFFUSE | flags::GLOSSY)
-        };
-        side | class
     }
 
     /// `value / pdf`, 0 where the sample failed.
@@ -131,6 +146,19 @@ impl<L: Lane> Sample<L> {
             #[inline(always)]
             |v| v.safe_div(pdf),
         )
+    }
+}
+
+impl Sample<f32> {
+    /// The `GLINT_FLAG_*` bits of a scalar sample: reflection or transmission, and
+    /// its class.
+    pub fn flags(&self) -> u32 {
+        let side = if self.transmitted {
+            flags::TRANSMISSION
+        } else {
+            flags::REFLECTION
+        };
+        side | self.class as u32
     }
 }
 
@@ -283,6 +311,14 @@ pub trait Model: Send + Sync + 'static {
     /// The leading part of the decoded block that `eval` and `sample` read: blocks
     /// staged per lane for them stop there (what follows only `albedo` reads).
     const LANE_DECODED_LEN: usize = Self::DECODED_LEN;
+    /// Bake what depends only on the parameters and `wo` (local, unit) into the
+    /// decoded block, once per shading point: closures built with a `wo` call it after
+    /// `decode`, and eval, sample and albedo at that `wo` read the result instead of
+    /// recomputing it ([`baked_or`]). The lobe lays the values out in its block and
+    /// `decode` marks them unbaked (a NaN key, which no `wo` matches), so blocks that
+    /// are never baked (material batches, lobe calls) compute as before. Default:
+    /// nothing to bake, no cost.
+    fn bake(_decoded: &mut [f32], _wo: Vec3<f32>, _mode: Transport) {}
 
     /// A decoded block as the model's functions read it.
     type Prepared<L: Lane>;
@@ -331,6 +367,8 @@ pub trait LobeType: Send + Sync {
     fn decode(&self, params: &[f32], out: &mut [f32]) {
         out.copy_from_slice(params);
     }
+    /// [`Model::bake`]: a decoded block's values that depend on `wo` alone.
+    fn bake(&self, _decoded: &mut [f32], _wo: Vec3<f32>, _mode: Transport) {}
     /// [`LobeType::decode`] of `len` lanes' blocks in rows (value `p` of lane `j` at
     /// `p * len + j`, in `params` and in `out`).
     fn decode_rows(&self, params: &[f32], out: &mut [f32], len: usize) {
@@ -510,6 +548,9 @@ impl<M: Model> LobeType for Builtin<M> {
     fn decode(&self, params: &[f32], out: &mut [f32]) {
         M::decode(params, out);
     }
+    fn bake(&self, decoded: &mut [f32], wo: Vec3<f32>, mode: Transport) {
+        M::bake(decoded, wo, mode);
+    }
     fn decode_rows(&self, params: &[f32], out: &mut [f32], len: usize) {
         if M::DECODE_COPIES && params.len() == out.len() {
             out.copy_from_slice(params);
@@ -614,6 +655,14 @@ impl std::ops::Deref for DecodedBlock {
     }
 }
 
+/// `baked` (a value [`Model::bake`] computed at a `wo` whose key was `key`) where
+/// every lane's `at` equals `key`, else `compute()`: a register of lanes either
+/// reads the bake or computes, and an unbaked (NaN) key always computes.
+#[inline(always)]
+pub fn baked_or<L: Lane, T>(at: L, key: L, baked: T, compute: impl FnOnce() -> T) -> T {
+    if at.eq(key).all() { baked } else { compute() }
+}
+
 /// Lanes where both directions are strictly above the surface.
 #[inline(always)]
 pub fn both_above<L: Lane>(wo: Vec3<L>, wi: Vec3<L>) -> L::Mask {
@@ -632,5 +681,7 @@ pub fn no_sample<L: Lane>() -> Sample<L> {
         delta: L::Mask::splat(false),
         eta: L::one(),
         roughness: L::zero(),
+        class: L::zero(),
+        component: L::zero(),
     }
 }

@@ -25,7 +25,7 @@ mod intern;
 
 use crate::error::{Error, Status};
 use crate::kernels::{self, EvalJob};
-use crate::lobes::{Eval, LobeType, Sample, Transport, VerifyCase, flags};
+use crate::lobes::{Eval, LobeType, Sample, Transport, VerifyCase, class_of, flags};
 use crate::math::{Rgb, Vec3};
 use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::{LobeRef, Registry};
@@ -528,13 +528,17 @@ impl LobeType for PluginLobe {
             self.count(1);
             1.0
         };
+        let delta = s.events & abi::EVENT_DELTA != 0;
         Sample {
             wi: wi.normalize(),
             value: self.clean_rgb(s.value),
             pdf: self.clean(s.pdf),
             valid: true,
             transmitted: s.events & abi::EVENT_TRANSMITTED != 0,
-            delta: s.events & abi::EVENT_DELTA != 0,
+            delta,
+            // ABI V1 has no per-sample class or component: the type's class, one component.
+            class: class_of(delta, self.flags),
+            component: 0.0,
             eta,
             roughness: if s.roughness.is_finite() {
                 s.roughness.clamp(0.0, 1.0)

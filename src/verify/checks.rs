@@ -258,7 +258,7 @@ fn chi2_and_consistency(
             }
             continue;
         }
-        if s.flags(lobe.flags()) & !lobe.flags() != 0 {
+        if !sample_kind_ok(lobe.flags(), &s) {
             report.flag_errors += 1;
         }
         if s.delta {
@@ -313,6 +313,24 @@ fn chi2_and_consistency(
         absorbed: absorbed_share,
         pdf_integral: total,
     });
+}
+
+/// Whether a valid sample's flags are among its lobe type's `lobe_flags`, its class
+/// is SPECULAR exactly where it is a delta event (value a fraction, pdf a discrete
+/// probability) and otherwise the type's DIFFUSE or GLOSSY class, and its component
+/// is a whole number.
+fn sample_kind_ok(lobe_flags: u32, s: &Sample<f32>) -> bool {
+    let class = s.class as u32;
+    let class_ok = if s.delta {
+        class == flags::SPECULAR
+    } else {
+        class != 0 && class & !(lobe_flags & (flags::DIFFUSE | flags::GLOSSY)) == 0
+    };
+    s.flags() & !lobe_flags == 0
+        && class as f32 == s.class
+        && class_ok
+        && s.component.fract() == 0.0
+        && s.component >= 0.0
 }
 
 /// Largest relative mismatch between a sample and `eval` at its direction; delta
@@ -600,6 +618,7 @@ fn scalar_vs_batch(lobe: &LobeRef, p: &[f32], lanes: usize, rng: &mut Rng) -> (f
                     }
                     cmp_sample(b.s_pdf[i], s.pdf);
                     cmp_sample(b.s_flags[i] as f32, s.flags as f32);
+                    cmp_sample(b.s_component[i] as f32, s.component as f32);
                 }
                 None => cmp_sample(b.s_pdf[i], 0.0),
             }
@@ -632,6 +651,7 @@ struct BatchResults {
     s_weight: [Vec<f32>; 3],
     s_pdf: Vec<f32>,
     s_flags: Vec<u32>,
+    s_component: Vec<u32>,
 }
 
 impl BatchResults {
@@ -653,6 +673,7 @@ impl BatchResults {
             s_weight: rows(),
             s_pdf: vec![0.0; n],
             s_flags: vec![0; n],
+            s_component: vec![0; n],
         };
         let out = EvalOutput {
             value: soa_mut(&mut r.value),
@@ -674,6 +695,7 @@ impl BatchResults {
             value: None,
             flags: Some(&mut r.s_flags),
             lobe: None,
+            component: Some(&mut r.s_component),
             eta: None,
             roughness: None,
         };

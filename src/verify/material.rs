@@ -99,6 +99,8 @@ impl LobeType for MaterialLobe {
                 delta: s.flags & flags::SPECULAR != 0,
                 eta: s.eta,
                 roughness: s.roughness,
+                class: (s.flags & (flags::DIFFUSE | flags::GLOSSY | flags::SPECULAR)) as f32,
+                component: s.component as f32,
             },
             Err(_) => failed,
         }
