@@ -17,6 +17,19 @@ fn sphere(rng: &mut Rng) -> Vec3<f32> {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// `n` random normals and a view direction on the side of each.
+fn normals_and_views(rng: &mut Rng, n: usize) -> (Vec<Vec3<f32>>, Vec<Vec3<f32>>) {
+    let normal: Vec<Vec3<f32>> = (0..n).map(|_| sphere(rng)).collect();
+    let wo = normal
+        .iter()
+        .map(|&nrm| {
+            let d = sphere(rng);
+            if d.dot(nrm) < 0.0 { -d } else { d }
+        })
+        .collect();
+    (normal, wo)
+}
+
 fn rows(v: &[Vec3<f32>]) -> [Vec<f32>; 3] {
     [
         v.iter().map(|d| d.x).collect(),
@@ -36,14 +49,7 @@ fn samples_carry_the_eval_at_their_direction() {
     let material = glint::json::material_from_json(&registry, description, 0.0).unwrap();
     let n = 3000;
     let mut rng = Rng::new(0xba7c);
-    let normal: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
-    let wo: Vec<Vec3<f32>> = normal
-        .iter()
-        .map(|&nrm| {
-            let d = sphere(&mut rng);
-            if d.dot(nrm) < 0.0 { -d } else { d }
-        })
-        .collect();
+    let (normal, wo) = normals_and_views(&mut rng, n);
     let (wo, normal) = (rows(&wo), rows(&normal));
     let u: Vec<Vec<f32>> = (0..3)
         .map(|_| (0..n).map(|_| rng.f32()).collect())
@@ -139,14 +145,7 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     };
     let n = 300;
     let mut rng = Rng::new(0xfa11);
-    let normal: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
-    let wo: Vec<Vec3<f32>> = normal
-        .iter()
-        .map(|&nrm| {
-            let d = sphere(&mut rng);
-            if d.dot(nrm) < 0.0 { -d } else { d }
-        })
-        .collect();
+    let (normal, wo) = normals_and_views(&mut rng, n);
     let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
     // Every third lane leaves the tangent to the library (all zero).
     let tangent: Vec<Vec3<f32>> = (0..n)

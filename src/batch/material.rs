@@ -331,7 +331,8 @@ fn stage_blocks(
             }
         }
     }
-    if any || failed.contains(&1) {
+    // Failed lanes, here or before.
+    if failed[..n].contains(&1) {
         for j in (0..n).filter(|&j| failed[j] != 0) {
             for (p, &v) in defaults.iter().enumerate() {
                 blocks[p * len + j] = v;
