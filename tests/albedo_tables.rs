@@ -8,7 +8,7 @@
 //! name contains `<text>` (`disney`: the Disney specular and clearcoat tables).
 
 use glint::albedo_table::Table;
-use glint::albedo_table::disney::{ClearcoatTable, SpecularTable};
+use glint::albedo_table::disney::{ClearcoatTable, SpecularAnisotropicTable, SpecularTable};
 use glint::albedo_table::generate::{cell, generate, quantize};
 use std::path::PathBuf;
 
@@ -30,13 +30,20 @@ type DisneyTable = (
     fn() -> Vec<u8>,
     fn(usize) -> Vec<f64>,
 );
-const DISNEY: [DisneyTable; 2] = [
+const DISNEY: [DisneyTable; 3] = [
     (
         SpecularTable::FILE,
         SpecularTable::CELLS,
         SpecularTable::CHANNELS,
         SpecularTable::generate,
         SpecularTable::cell,
+    ),
+    (
+        SpecularAnisotropicTable::FILE,
+        SpecularAnisotropicTable::CELLS,
+        SpecularAnisotropicTable::CHANNELS,
+        SpecularAnisotropicTable::generate,
+        SpecularAnisotropicTable::cell,
     ),
     (
         ClearcoatTable::FILE,

@@ -109,7 +109,8 @@ fn zero_below_the_horizon() {
     );
 }
 
-/// The table against slope-space quadrature: within 2%.
+/// The table against slope-space quadrature: within the documented tolerance (0.5%;
+/// measured 0.09%).
 #[test]
 fn albedo_matches_quadrature() {
     let l = lobe("disney_clearcoat");
@@ -126,7 +127,8 @@ fn albedo_matches_quadrature() {
             });
             let err = (got - want).abs() / want;
             worst = worst.max(err);
-            assert!(err < 0.02, "gloss {gloss} mu {mu}: {got} vs {want}");
+            let tol = f64::from(l.albedo_tolerance(block(gloss).as_slice()));
+            assert!(err < tol, "gloss {gloss} mu {mu}: {got} vs {want}");
         }
     }
     eprintln!("worst clearcoat albedo error {worst:e}");

@@ -2,35 +2,41 @@
 //! masking (separable Smith with a remapped or fixed roughness) the microfacet tables
 //! do not describe. Both are integrated offline in f64 by stratified quadrature in the
 //! lobe's own sampling variables and committed in `data/albedo/` as 16-bit codes
-//! (tests/albedo_tables.rs spot-checks them; `GLINT_BLESS=disney` regenerates them):
+//! (tests/albedo_tables.rs spot-checks them; `GLINT_BLESS=disney` regenerates them).
+//! Every table has [`NM`] `cos_o` nodes at `sqrt(cos_o)` spacing (narrow lobes at
+//! grazing change by 3% between 32 such nodes).
 //!
-//! - specular ([`SpecularTable`]): Schlick's split `f0 A + B`, `A = E[(1 - s) w]`,
-//!   `B = E[s w]`, `s = (1 - l.h)^5`, over visible GGX normals of `(ax, ay)` with
-//!   `w = 4 cos_o cos_i Gs(l) Gs(v) / G1(v)` (48 x 48 strata: the weights jump where
-//!   reflected directions cross the horizon);
-//!   axes `sqrt(cos_o)` (32 nodes), roughness (33), anisotropic (9) and the azimuth of
-//!   `wo` from the tangent (13, 0..90 degrees: at aspect 10 the grazing albedo doubles
-//!   between the axes);
+//! - specular: Schlick's split `f0 A + B`, `A = E[(1 - s) w]`, `B = E[s w]`,
+//!   `s = (1 - l.h)^5`, over visible GGX normals of `(ax, ay)` with
+//!   `w = 4 cos_o cos_i Gs(l) Gs(v) / G1(v)` (48 x 48 strata, warped toward the
+//!   distribution's far tail). Isotropic ([`SpecularTable`], 8 KB): `sqrt(cos_o)` x
+//!   `sqrt(roughness)` (33 nodes, dense toward the narrow lobes, whose grazing albedo
+//!   changes fastest). Anisotropic ([`SpecularAnisotropicTable`], 2 MB): also the log
+//!   aspect `-log10(1 - 0.9 anisotropic)` (13 nodes; the albedo is smooth in it, while in
+//!   `anisotropic` itself it bends toward 1; node 0 is the isotropic table) and the
+//!   azimuth of `wo` from the tangent (19 nodes, 0..90 degrees: at aspect 10 the grazing
+//!   albedo doubles between the axes), strata warped toward both ends of the disk;
 //! - clearcoat ([`ClearcoatTable`]): `E[Fr Gr 4 cos_i (v.h) / cos_h]` over GTR1 half
-//!   vectors (128 x 128 strata); axes `sqrt(cos_o)` (32) and gloss (17).
+//!   vectors (64 x 64 strata warped toward grazing half vectors); axes `sqrt(cos_o)` and gloss (33).
 //!
 //! Errors against independent quadrature are measured in tests/lobe_disney_specular.rs,
 //! tests/lobe_disney_clearcoat.rs and by the harness.
 
+use super::generate::{Warp, strata};
 use super::{corners, grid};
-use crate::math::{Lane, Vec3};
+use crate::math::{Lane, Mask, Vec3};
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 
-const NM: usize = 32;
+const NM: usize = 64;
 const NR: usize = 33;
-const NA: usize = 9;
-const NP: usize = 13;
-const NG: usize = 17;
+const NA: usize = 13;
+const NP: usize = 19;
+const NG: usize = 33;
 /// Strata per axis of each specular cell's quadrature (the weights of wide lobes jump
 /// where reflected directions cross the horizon).
 const STRATA: usize = 48;
-const COAT_STRATA: usize = 128;
+const COAT_STRATA: usize = 64;
 
 /// `cos_o` of node `i` of the `sqrt(cos_o)` axis (dense toward grazing).
 fn mu_node(i: usize) -> f64 {
@@ -93,29 +99,24 @@ fn reflect(v: [f64; 3], m: [f64; 3]) -> [f64; 3] {
 }
 
 /// `(A, B)` of the specular at `v` (f64 quadrature over stratified visible normals).
-pub fn specular_cell(v: [f64; 3], roughness: f64, anisotropic: f64) -> [f64; 2] {
+fn specular_cell(v: [f64; 3], roughness: f64, anisotropic: f64, warp: Warp) -> [f64; 2] {
     let (a, g) = specular_alphas(roughness, anisotropic);
-    let strata = STRATA;
     let g1 =
         2.0 * v[2] / (v[2] + ((a[0] * v[0]).powi(2) + (a[1] * v[1]).powi(2) + v[2] * v[2]).sqrt());
     let gv = smith_separable(v, g);
     let mut sum = [0.0; 2];
-    for i in 0..strata {
-        for j in 0..strata {
-            let u0 = (i as f64 + 0.5) / strata as f64;
-            let u1 = (j as f64 + 0.5) / strata as f64;
-            let m = ggx_visible(v, a, u0, u1);
-            let l = reflect(v, m);
-            if l[2] <= 0.0 {
-                continue;
-            }
-            let w = 4.0 * v[2] * l[2] * smith_separable(l, g) * gv / g1;
-            let s = (1.0 - dot(l, m)).clamp(0.0, 1.0).powi(5);
-            sum[0] += w * (1.0 - s);
-            sum[1] += w * s;
+    for (u0, u1, q) in strata(STRATA, warp) {
+        let m = ggx_visible(v, a, f64::from(u0), f64::from(u1));
+        let l = reflect(v, m);
+        if l[2] <= 0.0 {
+            continue;
         }
+        let w = q * 4.0 * v[2] * l[2] * smith_separable(l, g) * gv / g1;
+        let s = (1.0 - dot(l, m)).clamp(0.0, 1.0).powi(5);
+        sum[0] += w * (1.0 - s);
+        sum[1] += w * s;
     }
-    sum.map(|x| x / (strata * strata) as f64)
+    sum
 }
 
 /// The clearcoat's GTR1 alpha for `gloss`.
@@ -123,31 +124,30 @@ pub fn clearcoat_alpha(gloss: f64) -> f64 {
     0.1 + (0.001 - 0.1) * gloss
 }
 
-/// The clearcoat's albedo at `v` (f64 quadrature over `COAT_STRATA^2` GTR1 half vectors).
+/// The clearcoat's albedo at `v` (f64 quadrature over `COAT_STRATA^2` GTR1 half
+/// vectors, the `cos_h` coordinate warped toward grazing half vectors at `u = 1`, whose
+/// reflections cross the horizon).
 pub fn clearcoat_cell(v: [f64; 3], gloss: f64) -> f64 {
     let a2 = clearcoat_alpha(gloss).powi(2);
     let smith = |c: f64| 1.0 / (c + (0.0625 + c * c - 0.0625 * c * c).sqrt());
     let mut sum = 0.0;
-    for i in 0..COAT_STRATA {
-        for j in 0..COAT_STRATA {
-            let u0 = (i as f64 + 0.5) / COAT_STRATA as f64;
-            let u1 = (j as f64 + 0.5) / COAT_STRATA as f64;
-            let cos_h = ((1.0 - a2.powf(1.0 - u1)) / (1.0 - a2)).sqrt();
-            let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-            let phi = 2.0 * PI * u0;
-            let h = [sin_h * phi.cos(), sin_h * phi.sin(), cos_h];
-            let vh = dot(v, h);
-            let l = reflect(v, h);
-            if l[2] <= 0.0 || vh <= 0.0 {
-                continue;
-            }
-            let fr = 0.04 + 0.96 * (1.0 - vh).clamp(0.0, 1.0).powi(5);
-            sum += fr * smith(l[2]) * smith(v[2]) * 4.0 * l[2] * vh / cos_h;
+    for (u, u_phi, q) in strata(COAT_STRATA, Warp::Tail) {
+        // sin_h^2 = a^2 ((a^2)^(-u) - 1) / (1 - a^2): no cancellation at the peak.
+        let sin2 = a2 * (a2.powf(-f64::from(u)) - 1.0) / (1.0 - a2);
+        let (sin_h, cos_h) = (sin2.sqrt(), (1.0 - sin2).max(0.0).sqrt());
+        let phi = 2.0 * PI * f64::from(u_phi);
+        let h = [sin_h * phi.cos(), sin_h * phi.sin(), cos_h];
+        let vh = dot(v, h);
+        let l = reflect(v, h);
+        if l[2] <= 0.0 || vh <= 0.0 {
+            continue;
         }
+        let fr = 0.04 + 0.96 * (1.0 - vh).clamp(0.0, 1.0).powi(5);
+        sum += q * fr * smith(l[2]) * smith(v[2]) * 4.0 * l[2] * vh / cos_h;
     }
     // f = D Fr Gr with Gr = G(l) G(v) including 1 / (4 cos cos): the weight is
     // f cos_i / (D cos_h / (4 v.h)).
-    sum / (COAT_STRATA * COAT_STRATA) as f64
+    sum
 }
 
 fn view(mu: f64, phi: f64) -> [f64; 3] {
@@ -180,23 +180,46 @@ fn generate(cells: usize, cell: impl Fn(usize) -> Vec<f64> + Sync) -> Vec<u8> {
         .collect()
 }
 
-/// The Disney specular's albedo table (module docs).
+/// `sqrt(roughness)` at node `i`, and the roughness.
+fn roughness_node(i: usize) -> f64 {
+    (i as f64 / (NR - 1) as f64).powi(2)
+}
+
+/// The anisotropic table's aspect axis, `-log10(1 - 0.9 anisotropic)` in [0, 1].
+#[inline(always)]
+fn aspect_coordinate<L: Lane>(anisotropic: L) -> L {
+    let a = anisotropic.clamp(L::zero(), L::one());
+    -(-(L::splat(0.9) * a)).ln_1p() * L::splat(std::f32::consts::LOG10_E)
+}
+
+/// The interpolated `(A, B)` over the corners `c` (cells of 2 values in `values`).
+#[inline(always)]
+fn sum_pairs<L: Lane, const C: usize>(values: &[f32], c: [(L, L); C]) -> (L, L) {
+    let (mut a, mut b) = (L::zero(), L::zero());
+    for (cell, w) in c {
+        let at = cell * L::splat(2.0);
+        a = w.mul_add(L::gather(values, at), a);
+        b = w.mul_add(L::gather(values, at + L::one()), b);
+    }
+    (a, b)
+}
+
+/// The isotropic Disney specular's albedo table (module docs).
 pub struct SpecularTable;
 
 impl SpecularTable {
     pub const FILE: &'static str = "disney_specular.u16";
-    pub const CELLS: usize = NP * NA * NR * NM;
+    pub const CELLS: usize = NR * NM;
     pub const CHANNELS: usize = 2;
 
-    /// `(A, B)` of cell `i` (`[phi][anisotropic][roughness][mu]`).
+    /// `(A, B)` of cell `i` (`[sqrt(roughness)][mu]`).
     pub fn cell(i: usize) -> Vec<f64> {
-        let (m, r, a, p) = (i % NM, i / NM % NR, i / (NM * NR) % NA, i / (NM * NR * NA));
-        let phi = p as f64 / (NP - 1) as f64 * PI / 2.0;
-        let v = view(mu_node(m), phi);
-        specular_cell(v, r as f64 / (NR - 1) as f64, a as f64 / (NA - 1) as f64).to_vec()
+        let (m, r) = (i % NM, i / NM);
+        let v = view(mu_node(m), 0.0);
+        specular_cell(v, roughness_node(r), 0.0, Warp::Tail).to_vec()
     }
 
-    /// The whole table as committed (minutes on two cores).
+    /// The whole table as committed.
     pub fn generate() -> Vec<u8> {
         generate(Self::CELLS, Self::cell)
     }
@@ -213,33 +236,83 @@ impl SpecularTable {
     }
 
     /// `f0 A + B` as `(A, B)` at `wo` (above the surface) for `roughness` and
-    /// `anisotropic` in [0, 1].
+    /// `anisotropic` in [0, 1]: lanes with `anisotropic > 0` read
+    /// [`SpecularAnisotropicTable`], whose first aspect node is this table.
     #[inline(always)]
     pub fn lookup<L: Lane>(wo: Vec3<L>, roughness: L, anisotropic: L) -> (L, L) {
-        let (im, fm) = grid(wo.z.clamp(L::zero(), L::one()).sqrt(), NM);
-        let (ir, fr) = grid(roughness, NR);
-        let (ia, fa) = grid(anisotropic, NA);
+        let m = grid(wo.z.clamp(L::zero(), L::one()).sqrt(), NM);
+        let r = grid(roughness.max(L::zero()).sqrt(), NR);
+        let (a, b) = sum_pairs::<L, 4>(
+            Self::values(),
+            corners(L::zero(), [(m.0, m.1, 1), (r.0, r.1, NM)]),
+        );
+        let stretched = anisotropic.gt(L::zero());
+        if !stretched.any() {
+            return (a, b);
+        }
+        let (aa, ab) = SpecularAnisotropicTable::lookup(wo, m, r, anisotropic);
+        (L::select(stretched, aa, a), L::select(stretched, ab, b))
+    }
+}
+
+/// The anisotropic Disney specular's albedo table (module docs).
+pub struct SpecularAnisotropicTable;
+
+impl SpecularAnisotropicTable {
+    pub const FILE: &'static str = "disney_specular_anisotropic.u16";
+    pub const CELLS: usize = NP * NA * NR * NM;
+    pub const CHANNELS: usize = 2;
+
+    /// `(A, B)` of cell `i` (`[phi][aspect][sqrt(roughness)][mu]`).
+    pub fn cell(i: usize) -> Vec<f64> {
+        let (m, r, a, p) = (i % NM, i / NM % NR, i / (NM * NR) % NA, i / (NM * NR * NA));
+        if a == 0 {
+            // Isotropic: the isotropic table's cell, so the two agree there.
+            return SpecularTable::cell(r * NM + m);
+        }
+        // The inverse of `aspect_coordinate`.
+        let x = a as f64 / (NA - 1) as f64;
+        let anisotropic = ((1.0 - 10f64.powf(-x)) / 0.9).min(1.0);
+        let v = view(mu_node(m), p as f64 / (NP - 1) as f64 * PI / 2.0);
+        specular_cell(v, roughness_node(r), anisotropic, Warp::BothEnds).to_vec()
+    }
+
+    /// The whole table as committed (minutes on two cores).
+    pub fn generate() -> Vec<u8> {
+        generate(Self::CELLS, Self::cell)
+    }
+
+    fn values() -> &'static [f32] {
+        static VALUES: OnceLock<Vec<f32>> = OnceLock::new();
+        VALUES.get_or_init(|| {
+            decode(
+                include_bytes!("../../data/albedo/disney_specular_anisotropic.u16"),
+                Self::CELLS * Self::CHANNELS,
+                Self::FILE,
+            )
+        })
+    }
+
+    /// `(A, B)` at `wo` with the `cos_o` and roughness grid positions `m`, `r`.
+    #[inline(always)]
+    fn lookup<L: Lane>(wo: Vec3<L>, m: (L, L), r: (L, L), anisotropic: L) -> (L, L) {
         let phi = wo.y.abs().atan2(wo.x.abs()) * L::splat(std::f32::consts::FRAC_2_PI);
         // Along the normal the azimuth is undefined and the albedo isotropic.
         let phi = L::select(wo.x.abs().max(wo.y.abs()).gt(L::zero()), phi, L::zero());
         let (ip, fp) = grid(phi, NP);
-        let c: [(L, L); 16] = corners(
-            L::zero(),
-            [
-                (im, fm, 1),
-                (ir, fr, NM),
-                (ia, fa, NM * NR),
-                (ip, fp, NM * NR * NA),
-            ],
-        );
-        let values = Self::values();
-        let (mut a, mut b) = (L::zero(), L::zero());
-        for (cell, w) in c {
-            let at = cell * L::splat(2.0);
-            a = w.mul_add(L::gather(values, at), a);
-            b = w.mul_add(L::gather(values, at + L::one()), b);
-        }
-        (a, b)
+        let (ia, fa) = grid(aspect_coordinate(anisotropic), NA);
+        sum_pairs::<L, 16>(
+            Self::values(),
+            corners(
+                L::zero(),
+                [
+                    (m.0, m.1, 1),
+                    (r.0, r.1, NM),
+                    (ia, fa, NM * NR),
+                    (ip, fp, NM * NR * NA),
+                ],
+            ),
+        )
     }
 }
 

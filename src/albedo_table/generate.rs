@@ -17,7 +17,7 @@ const DIELECTRIC_ANISOTROPIC_STRATA: usize = 24;
 
 /// Where [`strata`] concentrates its `u0` points.
 #[derive(Clone, Copy)]
-enum Warp {
+pub(super) enum Warp {
     /// Toward `u0 = 1`, where the visible-normal samplers put the distribution's far tail:
     /// `u0 = 1 - (1 - v)^2`.
     Tail,
@@ -29,7 +29,7 @@ enum Warp {
 
 /// Stratified quadrature points `(u0, u1, weight)` on the unit square, `u0` warped by
 /// `warp` and weighted by its Jacobian.
-fn strata(n: usize, warp: Warp) -> impl Iterator<Item = (f32, f32, f64)> {
+pub(super) fn strata(n: usize, warp: Warp) -> impl Iterator<Item = (f32, f32, f64)> {
     (0..n * n).map(move |k| {
         let (i, j) = (k / n, k % n);
         let v = (i as f64 + 0.5) / n as f64;
