@@ -105,6 +105,13 @@
 #define GLINT_PARAM_NO_INDEX UINT32_MAX
 
 /*
+ An override's `param` addresses element (array element or table row) `e` of entry
+ `i` as `i | e << GLINT_PARAM_ELEMENT_SHIFT`; `glint_*_param_find` returns such
+ addresses for names like `ramp[3].position`.
+ */
+#define GLINT_PARAM_ELEMENT_SHIFT 16
+
+/*
  Most lanes one batch call takes (`count`; larger counts return
  `GLINT_ERROR_OUT_OF_RANGE` before any array is read): lanes are indexed by 32-bit
  integers.

@@ -113,7 +113,8 @@ pub const GLINT_PARAM_NO_INDEX: u32 = u32::MAX;
 /// An override's `param` addresses element (array element or table row) `e` of entry
 /// `i` as `i | e << GLINT_PARAM_ELEMENT_SHIFT`; `glint_*_param_find` returns such
 /// addresses for names like `ramp[3].position`.
-pub const GLINT_PARAM_ELEMENT_SHIFT: u32 = crate::params::ELEMENT_SHIFT;
+pub const GLINT_PARAM_ELEMENT_SHIFT: u32 = 16;
+const _: () = assert!(GLINT_PARAM_ELEMENT_SHIFT == crate::params::ELEMENT_SHIFT);
 
 /// A 3-vector (world-space direction or normal).
 #[repr(C)]
