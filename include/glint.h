@@ -65,6 +65,53 @@
 #define GLINT_PARAM_ENUM 2
 
 /*
+ `param_type` of group and table headers, which hold no values of their own.
+ */
+#define GLINT_PARAM_NONE 3
+
+/*
+ `glint_param_info.shape`: how an entry of a parameter schema repeats and nests.
+ One value.
+ */
+#define GLINT_SHAPE_VALUE 0
+
+/*
+ Up to `capacity` values of `param_type`, element i at `offset + i * size`, and a
+ count at `count_offset`.
+ */
+#define GLINT_SHAPE_ARRAY 1
+
+/*
+ A header without values: the next `member_count` entries belong to it.
+ */
+#define GLINT_SHAPE_GROUP 2
+
+/*
+ A header holding the row count (at `offset`); the next `member_count` entries are
+ its columns.
+ */
+#define GLINT_SHAPE_TABLE 3
+
+/*
+ A table column: `capacity` values, row i at `offset + i * size`; its count is the
+ table's.
+ */
+#define GLINT_SHAPE_COLUMN 4
+
+/*
+ `glint_param_info.parent` of a top-level entry; `count_offset` of an entry without
+ a count.
+ */
+#define GLINT_PARAM_NO_INDEX UINT32_MAX
+
+/*
+ An override's `param` addresses element (array element or table row) `e` of entry
+ `i` as `i | e << GLINT_PARAM_ELEMENT_SHIFT`; `glint_*_param_find` returns such
+ addresses for names like `ramp[3].position`.
+ */
+#define GLINT_PARAM_ELEMENT_SHIFT 16
+
+/*
  Most lanes one batch call takes (`count`; larger counts return
  `GLINT_ERROR_OUT_OF_RANGE` before any array is read): lanes are indexed by 32-bit
  integers.
@@ -469,17 +516,22 @@ typedef struct glint_param_info {
    Set by the caller to `sizeof(glint_param_info)`.
    */
   uint32_t struct_size;
+  /*
+   The full name: `roughness`, `coat.roughness` (group member), `ramp.position`
+   (table column).
+   */
   const char *name;
   /*
-   `GLINT_PARAM_FLOAT`, `GLINT_PARAM_RGB` or `GLINT_PARAM_ENUM`.
+   `GLINT_PARAM_FLOAT`, `GLINT_PARAM_RGB` or `GLINT_PARAM_ENUM` (of each element
+   of an array or column); `GLINT_PARAM_NONE` for group and table headers.
    */
   uint32_t param_type;
   /*
-   Position of the first value in the parameter block.
+   Position of the first value in the parameter block (of a table: its count).
    */
   uint32_t offset;
   /*
-   Number of floats (1, or 3 for RGB).
+   Number of floats of one value (1, or 3 for RGB; a table 1, a group 0).
    */
   uint32_t size;
   /*
@@ -497,6 +549,33 @@ typedef struct glint_param_info {
    */
   const char *choices;
   const char *doc;
+  /*
+   Fields below were added with nested schemas; a caller passing the first
+   version's `struct_size` (through `doc`) does not get them. `GLINT_SHAPE_*`.
+   */
+  uint32_t shape;
+  /*
+   Index of the group or table the entry belongs to; `GLINT_PARAM_NO_INDEX` at
+   the top level.
+   */
+  uint32_t parent;
+  /*
+   Group and table headers: how many entries after this one belong to it.
+   */
+  uint32_t member_count;
+  /*
+   Arrays, tables and columns: most elements (rows); 0 otherwise.
+   */
+  uint32_t capacity;
+  /*
+   Arrays, tables and columns: block offset of the count (a whole number of
+   elements in use, in [0, capacity]); `GLINT_PARAM_NO_INDEX` otherwise.
+   */
+  uint32_t count_offset;
+  /*
+   Arrays and tables: the default count.
+   */
+  uint32_t default_count;
 } glint_param_info;
 
 /*
@@ -537,7 +616,9 @@ typedef struct glint_shading_context {
 
 /*
  A textured parameter of one shading point: parameter `param` (its index in the
- material type's schema, see `glint_material_param_info`) of type `param_type`
+ material type's schema, see `glint_material_param_info`, or the address of an
+ array element or table cell: `index | element << GLINT_PARAM_ELEMENT_SHIFT`, as
+ `glint_material_param_find` returns for `ramp[3].position`) of type `param_type`
  (`GLINT_PARAM_*`, checked against the schema) set to `value` (`value[0]` for
  FLOAT and ENUM).
  */
@@ -922,7 +1003,8 @@ glint_status glint_material_type_info(const struct glint_runtime *runtime, uint3
 glint_status glint_material_param_info(const struct glint_runtime *runtime, uint32_t id, uint32_t index, struct glint_param_info *out);
 
 /*
- The index of the parameter named `name` of material type `id`.
+ The index of the parameter named `name` of material type `id`, or an element's
+ address (as `glint_lobe_param_find`).
 
  # Safety
  `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
@@ -1076,7 +1158,9 @@ glint_status glint_lobe_type_find(const struct glint_runtime *runtime, const cha
 glint_status glint_lobe_type_info(const struct glint_runtime *runtime, uint32_t id, struct glint_lobe_info *out);
 
 /*
- Describe parameter `index` of lobe type `id`.
+ Describe entry `index` of lobe type `id`'s schema (entries in order: a group or
+ table header is followed by its members). `out->struct_size` is
+ `sizeof(glint_param_info)` or the first version's size (fields through `doc`).
 
  # Safety
  `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
@@ -1084,7 +1168,9 @@ glint_status glint_lobe_type_info(const struct glint_runtime *runtime, uint32_t 
 glint_status glint_lobe_param_info(const struct glint_runtime *runtime, uint32_t id, uint32_t index, struct glint_param_info *out);
 
 /*
- The index of the parameter named `name` of lobe type `id`.
+ The index of the parameter named `name` (its full name, e.g. `coat.roughness`) of
+ lobe type `id`, or the address of an element (`weights[2]`, `ramp[3].position`:
+ see `GLINT_PARAM_ELEMENT_SHIFT`).
 
  # Safety
  `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.

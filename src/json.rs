@@ -24,7 +24,7 @@ use crate::lobes::Transport;
 use crate::materials::{Material, ShadingContext};
 use crate::math::Rgb;
 use crate::math::{Frame, Vec3};
-use crate::params::{self, ParamKind, ParamSpec};
+use crate::params::{self, ParamKind, ParamSpec, Shape};
 use crate::registry::Registry;
 use serde::de::{self, Deserialize, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::{Map, Number, Value};
@@ -229,7 +229,11 @@ fn placement(
 }
 
 /// A parameter block laid out by `specs`: the defaults, with every key of `entry`
-/// but `reserved` set (an unknown key is an error listing the valid ones).
+/// but `reserved` set (an unknown key is an error listing the valid ones). A key is
+/// an entry's full name (`coat.roughness`) or a top-level name; a group takes an
+/// object of its members, an array a list of values, a table a list of row objects
+/// (at most its capacity; the list's length is the count, cells not given keep their
+/// defaults). Setting one value twice (`"coat": {...}` and `"coat.x"`) is an error.
 fn read_block(
     specs: &[ParamSpec],
     entry: &Map<String, Value>,
@@ -237,46 +241,191 @@ fn read_block(
     name: &str,
     at: &dyn Fn(&str) -> String,
 ) -> Result<Vec<f32>, Error> {
-    let mut block = vec![0.0f32; params::block_size(specs)];
-    params::write_defaults(specs, &mut block);
+    let mut reader = BlockReader {
+        specs,
+        block: vec![0.0f32; params::block_size(specs)],
+        given: vec![false; specs.len()],
+        name,
+        at,
+    };
+    params::write_defaults(specs, &mut reader.block);
     for (key, value) in entry {
         if reserved.contains(&key.as_str()) {
             continue;
         }
-        let index = specs.iter().position(|s| s.name == key).ok_or_else(|| {
-            let valid: Vec<&str> = reserved
-                .iter()
-                .copied()
-                .chain(specs.iter().map(|s| s.name))
-                .collect();
-            Error::new(
-                Status::UnknownName,
-                format!(
-                    "{}: unknown key; valid keys for {name}: {}",
-                    at(key),
-                    valid.join(", ")
-                ),
-            )
-        })?;
-        let spec = &specs[index];
-        let offset = params::offset_of(specs, index);
-        match spec.kind {
-            ParamKind::Float => block[offset] = number(value, &at(key))?,
-            ParamKind::Rgb => block[offset..offset + 3].copy_from_slice(&rgb(value, &at(key))?),
-            ParamKind::Enum => {
-                let choices = spec.choices;
-                let choice = value.as_str().ok_or_else(|| {
-                    parse_error(format!(
-                        "{}: expected one of {}",
+        let index = specs
+            .iter()
+            .position(|s| s.name == key && s.shape != Shape::Column)
+            .ok_or_else(|| {
+                let valid: Vec<&str> = reserved
+                    .iter()
+                    .copied()
+                    .chain(
+                        specs
+                            .iter()
+                            .enumerate()
+                            .filter(|&(i, _)| params::parent_of(specs, i).is_none())
+                            .map(|(_, s)| s.name),
+                    )
+                    .collect();
+                Error::new(
+                    Status::UnknownName,
+                    format!(
+                        "{}: unknown key; valid keys for {name}: {}",
                         at(key),
-                        choices.join(", ")
-                    ))
+                        valid.join(", ")
+                    ),
+                )
+            })?;
+        reader.entry(index, value)?;
+    }
+    Ok(reader.block)
+}
+
+/// A block being read from JSON; `given` marks the entries set so far.
+struct BlockReader<'a> {
+    specs: &'a [ParamSpec],
+    block: Vec<f32>,
+    given: Vec<bool>,
+    name: &'a str,
+    at: &'a dyn Fn(&str) -> String,
+}
+
+impl BlockReader<'_> {
+    /// Set entry `index` (not a column) from `value`.
+    fn entry(&mut self, index: usize, value: &Value) -> Result<(), Error> {
+        let spec = &self.specs[index];
+        let offset = params::offset_of(self.specs, index);
+        let what = (self.at)(spec.name);
+        match spec.shape {
+            Shape::Value => self.value(index, 0, value, spec.name),
+            Shape::Column => unreachable!("columns are read with their table"),
+            Shape::Group => {
+                let members = value.as_object().ok_or_else(|| {
+                    parse_error(format!("{what}: expected an object, found {value}"))
                 })?;
-                block[offset] = spec.choice_index(name, choice)? as f32;
+                for (key, v) in members {
+                    let member = self.member(index, key)?;
+                    self.entry(member, v)?;
+                }
+                Ok(())
+            }
+            Shape::Array => {
+                let items = self.rows(index, value, "values")?;
+                self.block[offset] = items.len() as f32;
+                for (e, v) in items.iter().enumerate() {
+                    self.value(index, e, v, &params::element_path(spec, e))?;
+                }
+                Ok(())
+            }
+            Shape::Table => {
+                let rows = self.rows(index, value, "row objects")?;
+                self.block[offset] = rows.len() as f32;
+                for (r, row) in rows.iter().enumerate() {
+                    let row = row.as_object().ok_or_else(|| {
+                        parse_error(format!(
+                            "{}: expected an object, found {row}",
+                            (self.at)(&format!("{}[{r}]", spec.name))
+                        ))
+                    })?;
+                    for (key, v) in row {
+                        let column = self.member(index, key)?;
+                        let path = params::element_path(&self.specs[column], r);
+                        self.value(column, r, v, &path)?;
+                    }
+                }
+                Ok(())
             }
         }
     }
-    Ok(block)
+
+    /// The list given for array or table `index`: at most its capacity; marks it given.
+    fn rows<'v>(&mut self, index: usize, value: &'v Value, of: &str) -> Result<&'v [Value], Error> {
+        let spec = &self.specs[index];
+        let what = (self.at)(spec.name);
+        let items = value.as_array().ok_or_else(|| {
+            parse_error(format!(
+                "{what}: expected a list of at most {} {of}, found {value}",
+                spec.capacity
+            ))
+        })?;
+        if items.len() > spec.capacity as usize {
+            return Err(Error::new(
+                Status::OutOfRange,
+                format!(
+                    "{what}: {} {of} given; {} holds at most {}",
+                    items.len(),
+                    spec.name,
+                    spec.capacity
+                ),
+            ));
+        }
+        self.mark(index)?;
+        Ok(items)
+    }
+
+    /// The direct member `key` of group or table `header`.
+    fn member(&self, header: usize, key: &str) -> Result<usize, Error> {
+        let spec = &self.specs[header];
+        let members = header + 1..=header + spec.members as usize;
+        let direct = |j: &usize| params::parent_of(self.specs, *j) == Some(header);
+        let short = |j: usize| &self.specs[j].name[spec.name.len() + 1..];
+        members
+            .clone()
+            .filter(direct)
+            .find(|&j| short(j) == key)
+            .ok_or_else(|| {
+                let valid: Vec<&str> = members.filter(direct).map(short).collect();
+                Error::new(
+                    Status::UnknownName,
+                    format!(
+                        "{}: unknown key; valid keys for {}: {}",
+                        (self.at)(&format!("{}.{key}", spec.name)),
+                        spec.name,
+                        valid.join(", ")
+                    ),
+                )
+            })
+    }
+
+    /// An entry is set at most once (by its full name or inside its group).
+    fn mark(&mut self, index: usize) -> Result<(), Error> {
+        if std::mem::replace(&mut self.given[index], true) {
+            return Err(parse_error(format!(
+                "{}: given twice (by its full name and inside its group)",
+                (self.at)(self.specs[index].name)
+            )));
+        }
+        Ok(())
+    }
+
+    /// Element `element` of value entry `index` from `value`; `path` names it.
+    fn value(
+        &mut self,
+        index: usize,
+        element: usize,
+        value: &Value,
+        path: &str,
+    ) -> Result<(), Error> {
+        let spec = &self.specs[index];
+        if !spec.repeated() {
+            self.mark(index)?;
+        }
+        let at = params::offset_of(self.specs, index) + spec.element_offset(element);
+        let what = (self.at)(path);
+        match spec.kind {
+            ParamKind::Float => self.block[at] = number(value, &what)?,
+            ParamKind::Rgb => self.block[at..at + 3].copy_from_slice(&rgb(value, &what)?),
+            ParamKind::Enum => {
+                let choices = spec.choices;
+                let choice = value.as_str().ok_or_else(|| {
+                    parse_error(format!("{what}: expected one of {}", choices.join(", ")))
+                })?;
+                self.block[at] = spec.choice_index(self.name, choice)? as f32;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The material a document or entry names, compiled, and its `at` prefix.

@@ -90,6 +90,25 @@ impl Registry {
         Ok((self.types.len() - 1) as u32)
     }
 
+    /// Add a material type; its name must be new and its schema well formed
+    /// ([`crate::params::check_schema`]).
+    pub fn register_material(&mut self, material: &'static dyn MaterialType) -> Result<u32, Error> {
+        let invalid = |m: String| Error::new(Status::InvalidArgument, m);
+        crate::params::check_schema(material.params())
+            .map_err(|m| invalid(format!("material {}: {m}", material.name())))?;
+        if self.find_material(material.name()).is_ok() {
+            return Err(Error::new(
+                Status::DuplicateName,
+                format!(
+                    "a material type named \"{}\" is already registered",
+                    material.name()
+                ),
+            ));
+        }
+        self.materials.push(material);
+        Ok((self.materials.len() - 1) as u32)
+    }
+
     pub fn len(&self) -> usize {
         self.types.len()
     }

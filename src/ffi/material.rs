@@ -1,7 +1,7 @@
 //! Material types, compiled materials and shading contexts.
 
 use super::closure::{glint_arena, glint_closure, place_built, vec3_in};
-use super::runtime::{fill_param_info, runtime_ref};
+use super::runtime::{fill_param_info, param_info_out, runtime_ref};
 use super::*;
 use crate::materials::{Material, Override, ShadingContext, compiled::MAX_MATERIAL_PARAMS};
 use crate::math::{Frame, Vec3};
@@ -108,7 +108,9 @@ impl Sized32 for glint_shading_context {
 }
 
 /// A textured parameter of one shading point: parameter `param` (its index in the
-/// material type's schema, see `glint_material_param_info`) of type `param_type`
+/// material type's schema, see `glint_material_param_info`, or the address of an
+/// array element or table cell: `index | element << GLINT_PARAM_ELEMENT_SHIFT`, as
+/// `glint_material_param_find` returns for `ramp[3].position`) of type `param_type`
 /// (`GLINT_PARAM_*`, checked against the schema) set to `value` (`value[0]` for
 /// FLOAT and ENUM).
 #[repr(C)]
@@ -306,15 +308,18 @@ pub unsafe extern "C" fn glint_material_param_info(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { out_struct(out, "info") }?;
-        // SAFETY: per the contract.
-        let rt = unsafe { runtime_ref(runtime) }?;
-        let t = rt.runtime.registry.material(id)?;
-        fill_param_info(t.name(), t.params(), rt.material_strings(id), index, out)
+        unsafe {
+            param_info_out(out, |out| {
+                let rt = runtime_ref(runtime)?;
+                let t = rt.runtime.registry.material(id)?;
+                fill_param_info(t.name(), t.params(), rt.material_strings(id), index, out)
+            })
+        }
     })
 }
 
-/// The index of the parameter named `name` of material type `id`.
+/// The index of the parameter named `name` of material type `id`, or an element's
+/// address (as `glint_lobe_param_find`).
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.

@@ -90,6 +90,31 @@ pub const GLINT_CLOSURE_IMPORTANCE: u32 = 1;
 pub const GLINT_PARAM_FLOAT: u32 = 0;
 pub const GLINT_PARAM_RGB: u32 = 1;
 pub const GLINT_PARAM_ENUM: u32 = 2;
+/// `param_type` of group and table headers, which hold no values of their own.
+pub const GLINT_PARAM_NONE: u32 = 3;
+
+/// `glint_param_info.shape`: how an entry of a parameter schema repeats and nests.
+/// One value.
+pub const GLINT_SHAPE_VALUE: u32 = 0;
+/// Up to `capacity` values of `param_type`, element i at `offset + i * size`, and a
+/// count at `count_offset`.
+pub const GLINT_SHAPE_ARRAY: u32 = 1;
+/// A header without values: the next `member_count` entries belong to it.
+pub const GLINT_SHAPE_GROUP: u32 = 2;
+/// A header holding the row count (at `offset`); the next `member_count` entries are
+/// its columns.
+pub const GLINT_SHAPE_TABLE: u32 = 3;
+/// A table column: `capacity` values, row i at `offset + i * size`; its count is the
+/// table's.
+pub const GLINT_SHAPE_COLUMN: u32 = 4;
+/// `glint_param_info.parent` of a top-level entry; `count_offset` of an entry without
+/// a count.
+pub const GLINT_PARAM_NO_INDEX: u32 = u32::MAX;
+/// An override's `param` addresses element (array element or table row) `e` of entry
+/// `i` as `i | e << GLINT_PARAM_ELEMENT_SHIFT`; `glint_*_param_find` returns such
+/// addresses for names like `ramp[3].position`.
+pub const GLINT_PARAM_ELEMENT_SHIFT: u32 = 16;
+const _: () = assert!(GLINT_PARAM_ELEMENT_SHIFT == crate::params::ELEMENT_SHIFT);
 
 /// A 3-vector (world-space direction or normal).
 #[repr(C)]

@@ -1,7 +1,7 @@
 //! Version, status strings, the runtime and the lobe registry.
 
 use super::*;
-use crate::params::{self, ParamKind, ParamSpec};
+use crate::params::{self, ParamKind, ParamSpec, Shape};
 use crate::runtime::Runtime;
 use crate::simd::Isa;
 
@@ -108,7 +108,7 @@ impl LobeStrings {
     }
 }
 
-/// Describe parameter `index` of the type `owner` with schema `specs` and C strings
+/// Describe entry `index` of the type `owner` with schema `specs` and C strings
 /// `strings` (lobe and material types alike).
 pub(crate) fn fill_param_info(
     owner: &str,
@@ -117,7 +117,8 @@ pub(crate) fn fill_param_info(
     index: u32,
     out: &mut glint_param_info,
 ) -> Result<(), Error> {
-    let spec = specs.get(index as usize).ok_or_else(|| {
+    let i = index as usize;
+    let spec = specs.get(i).ok_or_else(|| {
         Error::new(
             Status::OutOfRange,
             format!(
@@ -126,43 +127,101 @@ pub(crate) fn fill_param_info(
             ),
         )
     })?;
-    let s = &strings.params[index as usize];
+    let s = &strings.params[i];
+    let offset = params::offset_of(specs, i);
+    let parent = params::parent_of(specs, i);
+    let count_offset = match (spec.shape, parent) {
+        (Shape::Array | Shape::Table, _) => offset as u32,
+        (Shape::Column, Some(table)) => params::offset_of(specs, table) as u32,
+        _ => GLINT_PARAM_NO_INDEX,
+    };
+    let header = matches!(spec.shape, Shape::Group | Shape::Table);
     *out = glint_param_info {
         struct_size: out.struct_size,
         name: s.name.as_ptr(),
         param_type: match spec.kind {
+            _ if header => GLINT_PARAM_NONE,
             ParamKind::Float => GLINT_PARAM_FLOAT,
             ParamKind::Rgb => GLINT_PARAM_RGB,
             ParamKind::Enum => GLINT_PARAM_ENUM,
         },
-        offset: params::offset_of(specs, index as usize) as u32,
-        size: spec.kind.size() as u32,
+        offset: (offset + spec.element_offset(0)) as u32,
+        size: match spec.shape {
+            Shape::Group => 0,
+            Shape::Table => 1,
+            _ => spec.kind.size() as u32,
+        },
         default_value: spec.default,
         min: spec.min,
         max: spec.max,
         choice_count: spec.choices().len() as u32,
         choices: s.choices.as_ptr(),
         doc: s.doc.as_ptr(),
+        shape: match spec.shape {
+            Shape::Value => GLINT_SHAPE_VALUE,
+            Shape::Array => GLINT_SHAPE_ARRAY,
+            Shape::Group => GLINT_SHAPE_GROUP,
+            Shape::Table => GLINT_SHAPE_TABLE,
+            Shape::Column => GLINT_SHAPE_COLUMN,
+        },
+        parent: parent.map_or(GLINT_PARAM_NO_INDEX, |p| p as u32),
+        member_count: spec.members,
+        capacity: spec.capacity,
+        count_offset,
+        default_count: spec.count,
     };
     Ok(())
 }
 
-/// The index of the parameter named `name` in `specs` (of the type `owner`).
+/// The address of the parameter named `name` in `specs` (of the type `owner`): an
+/// entry's index, or an element's ([`params::find`]).
 pub(crate) fn param_index(owner: &str, specs: &[ParamSpec], name: &str) -> Result<u32, Error> {
-    specs
-        .iter()
-        .position(|p| p.name == name)
-        .map(|i| i as u32)
-        .ok_or_else(|| {
-            let names: Vec<&str> = specs.iter().map(|p| p.name).collect();
-            Error::new(
-                Status::UnknownName,
-                format!(
-                    "{owner} has no parameter \"{name}\"; valid: {}",
-                    names.join(", ")
-                ),
-            )
-        })
+    params::find(owner, specs, name)
+}
+
+/// `struct_size` of `glint_param_info` as first published (through `doc`), still
+/// accepted: such callers get those fields.
+const PARAM_INFO_V1_SIZE: usize = std::mem::offset_of!(glint_param_info, shape);
+
+/// Fill a caller's `glint_param_info` of the first published size or the current
+/// one (or larger) with `fill`; failure leaves the failure state. A NULL struct or
+/// any other `struct_size` is an error and nothing is written.
+///
+/// # Safety
+/// `p` is NULL or valid for writes of its `struct_size` bytes (at least the field).
+pub(crate) unsafe fn param_info_out(
+    p: *mut glint_param_info,
+    fill: impl FnOnce(&mut glint_param_info) -> Result<(), Error>,
+) -> Result<(), Error> {
+    if p.is_null() {
+        return Err(null("info"));
+    }
+    // SAFETY: non-NULL; the caller's struct begins with `struct_size`.
+    let size = unsafe { std::ptr::addr_of!((*p).struct_size).read() };
+    let full = std::mem::size_of::<glint_param_info>();
+    if size as usize != PARAM_INFO_V1_SIZE && (size as usize) < full {
+        return Err(Error::new(
+            Status::StructSize,
+            format!(
+                "info.struct_size is {size}; this library takes {PARAM_INFO_V1_SIZE} (first \
+                 version) or at least {full}"
+            ),
+        ));
+    }
+    let mut info = glint_param_info::failed(size);
+    let result = fill(&mut info);
+    if result.is_err() {
+        info = glint_param_info::failed(size);
+    }
+    // SAFETY: the caller's struct holds `size` bytes; the copy stops at ours.
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            (&raw const info).cast::<u8>(),
+            p.cast::<u8>(),
+            (size as usize).min(full),
+        );
+    }
+    result
 }
 
 #[cold]
@@ -224,12 +283,15 @@ impl Output for glint_lobe_info {
 pub struct glint_param_info {
     /// Set by the caller to `sizeof(glint_param_info)`.
     pub struct_size: u32,
+    /// The full name: `roughness`, `coat.roughness` (group member), `ramp.position`
+    /// (table column).
     pub name: *const c_char,
-    /// `GLINT_PARAM_FLOAT`, `GLINT_PARAM_RGB` or `GLINT_PARAM_ENUM`.
+    /// `GLINT_PARAM_FLOAT`, `GLINT_PARAM_RGB` or `GLINT_PARAM_ENUM` (of each element
+    /// of an array or column); `GLINT_PARAM_NONE` for group and table headers.
     pub param_type: u32,
-    /// Position of the first value in the parameter block.
+    /// Position of the first value in the parameter block (of a table: its count).
     pub offset: u32,
-    /// Number of floats (1, or 3 for RGB).
+    /// Number of floats of one value (1, or 3 for RGB; a table 1, a group 0).
     pub size: u32,
     /// Default value (RGB: all three; ENUM: the choice index).
     pub default_value: [f32; 3],
@@ -240,6 +302,21 @@ pub struct glint_param_info {
     /// ENUM choices separated by '|', e.g. "ggx|beckmann"; "" otherwise.
     pub choices: *const c_char,
     pub doc: *const c_char,
+    /// Fields below were added with nested schemas; a caller passing the first
+    /// version's `struct_size` (through `doc`) does not get them. `GLINT_SHAPE_*`.
+    pub shape: u32,
+    /// Index of the group or table the entry belongs to; `GLINT_PARAM_NO_INDEX` at
+    /// the top level.
+    pub parent: u32,
+    /// Group and table headers: how many entries after this one belong to it.
+    pub member_count: u32,
+    /// Arrays, tables and columns: most elements (rows); 0 otherwise.
+    pub capacity: u32,
+    /// Arrays, tables and columns: block offset of the count (a whole number of
+    /// elements in use, in [0, capacity]); `GLINT_PARAM_NO_INDEX` otherwise.
+    pub count_offset: u32,
+    /// Arrays and tables: the default count.
+    pub default_count: u32,
 }
 
 impl Sized32 for glint_param_info {
@@ -262,6 +339,12 @@ impl Output for glint_param_info {
             choice_count: 0,
             choices: std::ptr::null(),
             doc: std::ptr::null(),
+            shape: 0,
+            parent: GLINT_PARAM_NO_INDEX,
+            member_count: 0,
+            capacity: 0,
+            count_offset: GLINT_PARAM_NO_INDEX,
+            default_count: 0,
         }
     }
 }
@@ -492,7 +575,9 @@ pub unsafe extern "C" fn glint_lobe_type_info(
     })
 }
 
-/// Describe parameter `index` of lobe type `id`.
+/// Describe entry `index` of lobe type `id`'s schema (entries in order: a group or
+/// table header is followed by its members). `out->struct_size` is
+/// `sizeof(glint_param_info)` or the first version's size (fields through `doc`).
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
@@ -505,15 +590,19 @@ pub unsafe extern "C" fn glint_lobe_param_info(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { out_struct(out, "info") }?;
-        // SAFETY: per the contract.
-        let rt = unsafe { runtime_ref(runtime) }?;
-        let t = rt.runtime.registry.get(id)?;
-        fill_param_info(t.name(), t.params(), &rt.strings[id as usize], index, out)
+        unsafe {
+            param_info_out(out, |out| {
+                let rt = runtime_ref(runtime)?;
+                let t = rt.runtime.registry.get(id)?;
+                fill_param_info(t.name(), t.params(), &rt.strings[id as usize], index, out)
+            })
+        }
     })
 }
 
-/// The index of the parameter named `name` of lobe type `id`.
+/// The index of the parameter named `name` (its full name, e.g. `coat.roughness`) of
+/// lobe type `id`, or the address of an element (`weights[2]`, `ramp[3].position`:
+/// see `GLINT_PARAM_ELEMENT_SHIFT`).
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.

@@ -55,6 +55,15 @@ impl Material {
     ) -> Result<Material, Error> {
         let kind = registry.material(type_id)?;
         let specs = kind.params();
+        if params::block_size(specs) > MAX_MATERIAL_PARAMS {
+            return Err(Error::new(
+                Status::Unsupported,
+                format!(
+                    "material {}: more than {MAX_MATERIAL_PARAMS} parameter values",
+                    kind.name()
+                ),
+            ));
+        }
         let mut block = vec![0.0; params::block_size(specs)];
         match params {
             Some(values) => {
@@ -114,17 +123,16 @@ impl Material {
     }
 
     /// The compiled block with `overrides` applied, into `out` (which holds
-    /// `self.params().len()` values). Errors name the override and the parameter.
+    /// `self.params().len()` values). An override's `param` is an address
+    /// ([`params::address`]: an entry, or an element of an array or table column).
+    /// Errors name the override and the parameter's path.
     pub fn apply(&self, overrides: &[Override], out: &mut [f32]) -> Result<(), Error> {
         out.copy_from_slice(&self.params);
-        let specs = self.kind.params();
         for (i, o) in overrides.iter().enumerate() {
-            let spec = self.override_spec(i, o.param, o.kind)?;
-            let n = spec.kind.size();
-            let at = params::offset_of(specs, o.param as usize);
-            let value = &o.value[..n];
-            self.check_override_value(i, spec, value)?;
-            out[at..at + n].copy_from_slice(value);
+            let slot = self.override_slot(i, o.param, o.kind)?;
+            let value = &o.value[..o.kind.size()];
+            self.check_element(i, slot.spec, value, slot.element)?;
+            out[slot.offset..slot.offset + value.len()].copy_from_slice(value);
         }
         Ok(())
     }
@@ -137,43 +145,67 @@ impl Material {
         spec: &ParamSpec,
         value: &[f32],
     ) -> Result<(), Error> {
-        params::validate(self.kind.name(), std::slice::from_ref(spec), value)
+        self.check_element(i, spec, value, 0)
+    }
+
+    fn check_element(
+        &self,
+        i: usize,
+        spec: &ParamSpec,
+        value: &[f32],
+        element: usize,
+    ) -> Result<(), Error> {
+        params::check_values(self.kind.name(), spec, value, element)
             .map_err(|e| Error::new(e.status, format!("overrides[{i}]: {}", e.message)))
     }
 
-    /// The schema entry override `i`, of parameter `param` as a `kind`, sets (errors:
-    /// unknown index, wrong kind).
+    /// The value override `i`, of address `param` as a `kind`, sets (errors: unknown
+    /// index or element, a group or table header, wrong kind).
+    pub fn override_slot(
+        &self,
+        i: usize,
+        param: u32,
+        kind: ParamKind,
+    ) -> Result<params::Slot<'_>, Error> {
+        let what = format_args!("overrides[{i}]");
+        let slot = params::locate(self.kind.name(), self.kind.params(), param, &what)?;
+        if slot.spec.kind != kind {
+            return Err(Error::new(
+                Status::InvalidArgument,
+                format!(
+                    "{what}: {}.{} is {}, not {}",
+                    self.kind.name(),
+                    slot.spec.name,
+                    kind_name(slot.spec.kind),
+                    kind_name(kind)
+                ),
+            ));
+        }
+        Ok(slot)
+    }
+
+    /// The schema entry override `i`, of parameter `param` as a `kind`, sets, for the
+    /// material batches, which override single values only (by entry index, so
+    /// inside groups too): arrays and table cells are an `Unsupported` error there.
     pub fn override_spec(
         &self,
         i: usize,
         param: u32,
         kind: ParamKind,
     ) -> Result<&ParamSpec, Error> {
-        let what = format_args!("overrides[{i}]");
-        let specs = self.kind.params();
-        let spec = specs.get(param as usize).ok_or_else(|| {
-            Error::new(
-                Status::OutOfRange,
-                format!(
-                    "{what}: parameter index {param} does not exist ({} has {} parameters)",
-                    self.kind.name(),
-                    specs.len()
-                ),
-            )
-        })?;
-        if spec.kind != kind {
+        let slot = self.override_slot(i, param, kind)?;
+        if slot.spec.repeated() {
             return Err(Error::new(
-                Status::InvalidArgument,
+                Status::Unsupported,
                 format!(
-                    "{what}: {}.{} is {}, not {}",
+                    "overrides[{i}]: {}.{} is an array or table column; material batches \
+                     override single values only",
                     self.kind.name(),
-                    spec.name,
-                    kind_name(spec.kind),
-                    kind_name(kind)
+                    slot.spec.name
                 ),
             ));
         }
-        Ok(spec)
+        Ok(slot.spec)
     }
 
     /// Build (and finish) the closure of one shading point into `closure`, which is

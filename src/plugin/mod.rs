@@ -422,18 +422,10 @@ fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
                         p.min, p.max
                     )));
                 }
-                ParamSpec {
-                    name,
-                    kind,
-                    choices,
-                    default: if n == 1 {
-                        [p.default_value[0]; 3]
-                    } else {
-                        p.default_value
-                    },
-                    min: p.min,
-                    max: p.max,
-                    doc,
+                if n == 1 {
+                    ParamSpec::float(name, p.default_value[0], p.min, p.max, doc)
+                } else {
+                    ParamSpec::rgb(name, p.default_value, p.min, p.max, doc)
                 }
             }
         };
