@@ -70,7 +70,7 @@ fn reflection_cell(dist: &Distribution<f32>, wo: Vec3<f32>, n: usize, warp: Warp
     let g1 = dist.g1(wo);
     let mut h = vec![0.0f64; CHANNELS];
     for (u0, u1, q) in strata(n, warp) {
-        let m = dist.sample_visible(wo, u0, u1);
+        let m = dist.sample(wo, u0, u1);
         let wi = wo.reflect(m);
         if wi.z <= 0.0 {
             continue;
@@ -101,7 +101,7 @@ fn dielectric_cell(
     let g1 = dist.g1(wo);
     let (mut r, mut t) = (0.0f64, 0.0f64);
     for (u0, u1, q) in strata(n, warp) {
-        let m = dist.sample_visible(wo, u0, u1);
+        let m = dist.sample(wo, u0, u1);
         let c = wo.dot(m);
         let f = fresnel::dielectric(c, eta);
         let wr = wo.reflect(m);

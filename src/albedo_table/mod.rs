@@ -38,7 +38,7 @@ pub mod generate;
 
 use crate::fresnel::{self, FresnelModel};
 use crate::math::{Lane, Mask, Rgb, Vec3};
-use crate::microfacet::{Distribution, MIN_ALPHA, NdfKind};
+use crate::microfacet::{Distribution, MIN_ALPHA, Ndf, NdfKind, SmithNdf, smith_ndfs};
 use std::sync::OnceLock;
 
 /// `mu` nodes of the reflection tables.
@@ -80,17 +80,21 @@ const DIELECTRIC_CHANNELS: usize = 2;
 const TIR_WIDTH: f32 = 2.0;
 const TIR_MIN_WIDTH: f32 = 1e-3;
 
-/// The tables, in the order of [`Table::ALL`].
-const FILES: [&[u8]; 8] = [
-    include_bytes!("../../data/albedo/reflection_ggx.u16"),
-    include_bytes!("../../data/albedo/reflection_beckmann.u16"),
-    include_bytes!("../../data/albedo/reflection_anisotropic_ggx.u16"),
-    include_bytes!("../../data/albedo/reflection_anisotropic_beckmann.u16"),
-    include_bytes!("../../data/albedo/dielectric_ggx.u16"),
-    include_bytes!("../../data/albedo/dielectric_beckmann.u16"),
-    include_bytes!("../../data/albedo/dielectric_anisotropic_ggx.u16"),
-    include_bytes!("../../data/albedo/dielectric_anisotropic_beckmann.u16"),
-];
+/// The table files of every layout for every kind, layout-major in [`Layout::ALL`] and
+/// [`NdfKind::ALL`] order ([`Table::index`]).
+macro_rules! table_files {
+    ({} $($variant:ident $name:literal),+) => {
+        [
+            $(include_bytes!(concat!("../../data/albedo/reflection_", $name, ".u16")).as_slice(),)+
+            $(include_bytes!(concat!("../../data/albedo/reflection_anisotropic_", $name, ".u16")).as_slice(),)+
+            $(include_bytes!(concat!("../../data/albedo/dielectric_", $name, ".u16")).as_slice(),)+
+            $(include_bytes!(concat!("../../data/albedo/dielectric_anisotropic_", $name, ".u16")).as_slice(),)+
+        ]
+    };
+}
+const FILES: [&[u8]; TABLES] = smith_ndfs!(table_files! {});
+/// One table per layout and kind.
+const TABLES: usize = Layout::ALL.len() * NdfKind::ALL.len();
 
 /// The grid layouts a table can have.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,6 +109,15 @@ pub enum Layout {
     DielectricAnisotropic,
 }
 
+impl Layout {
+    pub const ALL: [Layout; 4] = [
+        Layout::Reflection,
+        Layout::ReflectionAnisotropic,
+        Layout::Dielectric,
+        Layout::DielectricAnisotropic,
+    ];
+}
+
 /// One committed table: a layout for one distribution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Table {
@@ -113,27 +126,21 @@ pub struct Table {
 }
 
 impl Table {
-    pub const ALL: [Table; 8] = [
-        Table::new(Layout::Reflection, NdfKind::Ggx),
-        Table::new(Layout::Reflection, NdfKind::Beckmann),
-        Table::new(Layout::ReflectionAnisotropic, NdfKind::Ggx),
-        Table::new(Layout::ReflectionAnisotropic, NdfKind::Beckmann),
-        Table::new(Layout::Dielectric, NdfKind::Ggx),
-        Table::new(Layout::Dielectric, NdfKind::Beckmann),
-        Table::new(Layout::DielectricAnisotropic, NdfKind::Ggx),
-        Table::new(Layout::DielectricAnisotropic, NdfKind::Beckmann),
-    ];
+    /// Every table, in [`Table::index`] order.
+    pub fn all() -> impl Iterator<Item = Table> {
+        Layout::ALL.into_iter().flat_map(|layout| {
+            NdfKind::ALL
+                .iter()
+                .map(move |&kind| Table::new(layout, kind))
+        })
+    }
 
     const fn new(layout: Layout, kind: NdfKind) -> Table {
         Table { layout, kind }
     }
 
     fn index(self) -> usize {
-        let kind = match self.kind {
-            NdfKind::Ggx => 0,
-            NdfKind::Beckmann => 1,
-        };
-        2 * self.layout as usize + kind
+        NdfKind::ALL.len() * self.layout as usize + self.kind as usize
     }
 
     /// The file name under `data/albedo/`.
@@ -144,11 +151,7 @@ impl Table {
             Layout::Dielectric => "dielectric",
             Layout::DielectricAnisotropic => "dielectric_anisotropic",
         };
-        let kind = match self.kind {
-            NdfKind::Ggx => "ggx",
-            NdfKind::Beckmann => "beckmann",
-        };
-        format!("{layout}_{kind}.u16")
+        format!("{layout}_{}.u16", self.kind.name())
     }
 
     /// Cells in the table.
@@ -171,7 +174,7 @@ impl Table {
 
     /// The decoded values, `channels()` per cell.
     fn values(self) -> &'static [f32] {
-        static DECODED: [OnceLock<Vec<f32>>; 8] = [const { OnceLock::new() }; 8];
+        static DECODED: [OnceLock<Vec<f32>>; TABLES] = [const { OnceLock::new() }; TABLES];
         DECODED[self.index()].get_or_init(|| {
             let bytes = FILES[self.index()];
             let len = self.cells() * self.channels();

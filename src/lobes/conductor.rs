@@ -24,21 +24,13 @@ use super::{
 use crate::albedo_table::{FresnelNodes, ReflectionTable};
 use crate::fresnel::FresnelModel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
-use crate::microfacet::{Distribution, NdfKind, View};
+use crate::microfacet::{Distribution, Ndf, NdfKind, SmithNdf, View};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct Conductor;
 
 /// Choices of the `distribution` parameter, shared by every microfacet lobe.
-pub const DISTRIBUTION_CHOICES: &[&str] = &["ggx", "beckmann"];
-
-pub(crate) fn ndf_kind(choice: usize) -> NdfKind {
-    if choice == 1 {
-        NdfKind::Beckmann
-    } else {
-        NdfKind::Ggx
-    }
-}
+pub const DISTRIBUTION_CHOICES: &[&str] = NdfKind::NAMES;
 
 /// Length of a decoded microfacet distribution: kind, `alpha_x`, `alpha_y`, roughness.
 pub(crate) const DISTRIBUTION_DECODED_LEN: usize = 4;
@@ -47,7 +39,8 @@ pub(crate) const DISTRIBUTION_DECODED_LEN: usize = 4;
 /// microfacet lobe's block into `out[..DISTRIBUTION_DECODED_LEN]`.
 pub(crate) fn decode_distribution(params: &[f32], out: &mut [f32]) -> Distribution<f32> {
     let (kind, roughness, anisotropic) = (params[0], params[1], params[2]);
-    let dist = Distribution::from_roughness(ndf_kind(kind as usize), roughness, anisotropic);
+    let dist =
+        Distribution::from_roughness(NdfKind::from_choice(kind as usize), roughness, anisotropic);
     out[..DISTRIBUTION_DECODED_LEN].copy_from_slice(&[kind, dist.alpha_x, dist.alpha_y, roughness]);
     dist
 }
@@ -56,7 +49,7 @@ pub(crate) fn decode_distribution(params: &[f32], out: &mut [f32]) -> Distributi
 #[inline(always)]
 pub(crate) fn read_distribution<L: Lane>(decoded: &Params<'_, L>) -> (Distribution<L>, L) {
     let dist = Distribution {
-        kind: ndf_kind(decoded.choice(0)),
+        kind: NdfKind::from_choice(decoded.choice(0)),
         alpha_x: decoded.float(1),
         alpha_y: decoded.float(2),
     };
@@ -182,7 +175,7 @@ impl Model for Conductor {
     ) -> Sample<L> {
         let delta = p.dist.is_delta();
         let up = Vec3::splat(0.0, 0.0, 1.0);
-        let m = Vec3::select(delta, up, p.dist.sample_visible(wo, u0, u1));
+        let m = Vec3::select(delta, up, p.dist.sample(wo, u0, u1));
         let wi = settle.settle(wo.reflect(m));
         // Value and pdf by eval's own finish at the settled wi (the wo side computed
         // the same way), so that both agree with eval to the last bit: narrow lobes

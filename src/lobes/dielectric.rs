@@ -28,7 +28,7 @@ use super::{Eval, Model, Params, Sample, Settle, Transport, VerifyCase, class_of
 use crate::albedo_table::DielectricTable;
 use crate::fresnel;
 use crate::math::{Lane, Mask, Rgb, Vec3};
-use crate::microfacet::{Distribution, View};
+use crate::microfacet::{Distribution, Ndf, SmithNdf, View};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct Dielectric;
@@ -286,7 +286,7 @@ impl Model for Dielectric {
         settle: &mut impl Settle<L>,
     ) -> Sample<L> {
         let up = Vec3::splat(0.0, 0.0, 1.0);
-        let wm = Vec3::select(p.smooth, up, p.dist.sample_visible(wo, u0, u1));
+        let wm = Vec3::select(p.smooth, up, p.dist.sample(wo, u0, u1));
         let wo_m = wo.dot(wm);
         let f = fresnel::dielectric_sin2(wo_m, wo.cross(wm).length_squared(), p.eta);
         let reflect = uc.lt(f);

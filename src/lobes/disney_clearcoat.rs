@@ -17,28 +17,25 @@
 //! Parameters:
 //! - `gloss` (float, [0, 1], default 1): clearcoatGloss.
 //!
-//! The constants of `Dr` (`a^2`, `(a^2 - 1) / (pi ln(a^2))`, `ln(a^2)`, `1 / (1 - a^2)`)
-//! are computed once per lobe in f64 at decode.
+//! `Dr` is [`Gtr1`], its constants computed once per lobe in f64 at decode.
 //!
-//! Sampling: GTR1 half vectors in closed form (`phi = 2 pi u0`, `cos_h^2 = (1 -
-//! (a^2)^(1 - u1)) / (1 - a^2)`), written as `sin_h^2 = a^2 ((a^2)^(-u1) - 1) / (1 - a^2)`
-//! and `cos_h^2 = (1 - a^2 (a^2)^(-u1)) / (1 - a^2)`, so that the small `sin_h^2` near the
-//! peak is not the difference of two numbers near 1; `l = reflect(v, h)`, pdf
-//! `Dr cos_h / (4 v.h)`. Albedo from `albedo_table::disney::ClearcoatTable`. One-sided.
+//! Sampling: GTR1 half vectors in closed form ([`Gtr1`]'s sampler), `l = reflect(v, h)`,
+//! pdf `Dr cos_h / (4 v.h)`. Albedo from `albedo_table::disney::ClearcoatTable`. One-sided.
 
 use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
 use crate::albedo_table::disney::ClearcoatTable;
 use crate::fresnel::schlick_weight_pair;
-use crate::math::{Lane, Mask, PI, Rgb, Vec3};
+use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::microfacet::{Gtr1, Ndf};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct DisneyClearcoat;
 
 const GLOSS: usize = offset_of(DisneyClearcoat::PARAMS, 0);
 
-/// The decoded block: gloss, then GTR1's constants ([`gtr1_constants`]).
+/// The decoded block: gloss, then GTR1's constants ([`Gtr1::constants`]).
 const D_GLOSS: usize = 0;
 const D_A2: usize = 1;
 const D_NORM: usize = 2;
@@ -47,28 +44,7 @@ const D_INV_1MA2: usize = 4;
 
 pub struct Prepared<L> {
     gloss: L,
-    /// `a^2` of GTR1.
-    a2: L,
-    /// `(a^2 - 1) / (pi ln(a^2))`, the numerator of GTR1.
-    norm: L,
-    /// `ln(a^2)`.
-    ln_a2: L,
-    /// `1 / (1 - a^2)`.
-    inv_one_minus_a2: L,
-}
-
-/// `[a^2, (a^2 - 1) / (pi ln(a^2)), ln(a^2), 1 / (1 - a^2)]` of GTR1 for `gloss` (clamped
-/// to [0, 1]), in f64; `a <= 0.1`, so `ln(a^2) <= -4.6`.
-fn gtr1_constants(gloss: f32) -> [f64; 4] {
-    let g = f64::from(gloss.clamp(0.0, 1.0));
-    let a2 = (0.1 + (0.001 - 0.1) * g).powi(2);
-    let ln_a2 = a2.ln();
-    [
-        a2,
-        (a2 - 1.0) / (std::f64::consts::PI * ln_a2),
-        ln_a2,
-        1.0 / (1.0 - a2),
-    ]
+    gtr1: Gtr1<L>,
 }
 
 /// `SmithG_GGX(c, 0.25)`.
@@ -76,16 +52,6 @@ fn gtr1_constants(gloss: f32) -> [f64; 4] {
 fn smith<L: Lane>(c: L) -> L {
     let a2 = L::splat(0.0625);
     L::one() / (c + (a2 + c * c - a2 * c * c).sqrt())
-}
-
-impl DisneyClearcoat {
-    /// GTR1 at the unit half vector `h`, its denominator `1 + (a^2 - 1) cos_h^2`
-    /// written `a^2 cos_h^2 + sin_h^2` with `sin_h^2` from `h`'s tangent components:
-    /// `1 - cos_h^2` would cancel near the peak, where `a^2` is as small as 1e-6.
-    #[inline(always)]
-    fn d<L: Lane>(p: &Prepared<L>, h: Vec3<L>) -> L {
-        p.norm / (p.a2 * h.z * h.z + h.x * h.x + h.y * h.y)
-    }
 }
 
 impl Model for DisneyClearcoat {
@@ -124,7 +90,9 @@ impl Model for DisneyClearcoat {
 
     fn decode(params: &[f32], out: &mut [f32]) {
         out[D_GLOSS] = params[GLOSS];
-        for (o, c) in out[D_A2..].iter_mut().zip(gtr1_constants(params[GLOSS])) {
+        // a = mix(0.1, 0.001, gloss) <= 0.1, so ln(a^2) <= -4.6.
+        let a = 0.1 + (0.001 - 0.1) * f64::from(params[GLOSS].clamp(0.0, 1.0));
+        for (o, c) in out[D_A2..].iter_mut().zip(Gtr1::constants(a)) {
             *o = c as f32;
         }
     }
@@ -133,10 +101,12 @@ impl Model for DisneyClearcoat {
     fn prepare<L: Lane>(p: Params<'_, L>) -> Prepared<L> {
         Prepared {
             gloss: p.float(D_GLOSS),
-            a2: p.float(D_A2),
-            norm: p.float(D_NORM),
-            ln_a2: p.float(D_LN_A2),
-            inv_one_minus_a2: p.float(D_INV_1MA2),
+            gtr1: Gtr1 {
+                a2: p.float(D_A2),
+                norm: p.float(D_NORM),
+                ln_a2: p.float(D_LN_A2),
+                inv_one_minus_a2: p.float(D_INV_1MA2),
+            },
         }
     }
 
@@ -149,9 +119,9 @@ impl Model for DisneyClearcoat {
         let len2 = hu.length_squared();
         let ok = both_above(wo, wi) & len2.gt(L::zero());
         let h = hu * (L::one() / len2.sqrt());
-        let d = Self::d(p, h);
+        let d = p.gtr1.d(h);
         let vh = wo.dot(h);
-        let pdf = L::select(ok, d * h.z / (L::splat(4.0) * vh), L::zero());
+        let pdf = L::select(ok, p.gtr1.pdf(wo, h) / (L::splat(4.0) * vh), L::zero());
         let fr = L::splat(0.04) + L::splat(0.96) * schlick_weight_pair(wo, wi);
         let value = d * fr * smith(wi.z) * smith(wo.z) * wi.z;
         let value = L::select(ok, value, L::zero());
@@ -171,13 +141,7 @@ impl Model for DisneyClearcoat {
         mode: Transport,
         settle: &mut impl Settle<L>,
     ) -> Sample<L> {
-        // t = (a^2)^(-u1) in [1, 1 / a^2].
-        let t = (-(u1 * p.ln_a2)).exp();
-        let sin2 = (p.a2 * (t - L::one()) * p.inv_one_minus_a2).clamp(L::zero(), L::one());
-        let cos2 = ((L::one() - p.a2 * t) * p.inv_one_minus_a2).max(L::zero());
-        let sin_h = sin2.sqrt();
-        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u0).sin_cos();
-        let h = Vec3::new(sin_h * cos_phi, sin_h * sin_phi, cos2.sqrt());
+        let h = p.gtr1.sample(wo, u0, u1);
         let wi = settle.settle(wo.reflect(h));
         let e = Self::eval(p, wo, wi, mode);
         Sample {

@@ -34,7 +34,7 @@ use super::{
 use crate::albedo_table::disney::SpecularTable;
 use crate::fresnel::schlick_weight_pair;
 use crate::math::{Lane, Mask, Rgb, Vec3};
-use crate::microfacet::{Distribution, NdfKind};
+use crate::microfacet::{Ggx, Ndf, SmithNdf, burley_alpha};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct DisneySpecular;
@@ -47,7 +47,7 @@ const F0: usize = offset_of(DisneySpecular::PARAMS, 2);
 const MIN_ALPHA: f32 = 0.001;
 
 pub struct Prepared<L> {
-    dist: Distribution<L>,
+    dist: Ggx<L>,
     /// The masking's remapped alphas.
     gx: L,
     gy: L,
@@ -135,18 +135,17 @@ impl Model for DisneySpecular {
     fn prepare<L: Lane>(p: Params<'_, L>) -> Prepared<L> {
         let roughness = p.float(ROUGHNESS);
         let anisotropic = p.float(ANISOTROPIC);
-        let aspect = (L::one() - L::splat(0.9) * anisotropic).sqrt();
-        let alpha = roughness * roughness;
-        let g = (L::splat(0.5) + L::splat(0.5) * roughness).sqr();
-        let min = L::splat(MIN_ALPHA);
+        let (alpha_x, alpha_y) = burley_alpha(roughness, anisotropic, MIN_ALPHA);
+        // The 2012 masking remap: alpha_g = (0.5 + roughness / 2)^2, stretched alike.
+        let (gx, gy) = burley_alpha(
+            L::splat(0.5) + L::splat(0.5) * roughness,
+            anisotropic,
+            MIN_ALPHA,
+        );
         Prepared {
-            dist: Distribution {
-                kind: NdfKind::Ggx,
-                alpha_x: (alpha / aspect).max(min),
-                alpha_y: (alpha * aspect).max(min),
-            },
-            gx: (g / aspect).max(min),
-            gy: (g * aspect).max(min),
+            dist: Ggx { alpha_x, alpha_y },
+            gx,
+            gy,
             f0: p.rgb(F0),
             roughness,
             anisotropic,
@@ -188,7 +187,7 @@ impl Model for DisneySpecular {
         mode: Transport,
         settle: &mut impl Settle<L>,
     ) -> Sample<L> {
-        let m = p.dist.sample_visible(wo, u0, u1);
+        let m = p.dist.sample(wo, u0, u1);
         let wi = settle.settle(wo.reflect(m));
         // Value and pdf by eval at the settled direction, so both agree with eval to
         // the last bit.
