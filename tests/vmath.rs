@@ -852,3 +852,37 @@ fn special_values() {
         );
     }
 }
+
+/// The scalar lane's `floor` (by truncation, no libm call) equals the f64 floor
+/// everywhere: integers and halves on both sides of zero, denormals, the 2^23 edge,
+/// huge values, infinities and NaN.
+#[test]
+fn scalar_floor_matches_f64_floor() {
+    use glint::math::Lane;
+    let mut xs = vec![
+        0.0f32,
+        -0.0,
+        1e-45,
+        -1e-45,
+        0.5,
+        -0.5,
+        1.0,
+        -1.0,
+        -1.5,
+        8_388_607.5,
+        -8_388_607.5,
+        8_388_608.0,
+        -8_388_609.0,
+        3e38,
+        -3e38,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    xs.extend(rand(-1e4, 1e4, 100_000, 7));
+    xs.extend(around(&[1.0, -1.0, 2.0, -2.0, 1024.0, -1024.0], 4));
+    for x in xs {
+        let expected = f64::from(x).floor() as f32;
+        assert_eq!(<f32 as Lane>::floor(x), expected, "floor({x:e})");
+    }
+    assert!(<f32 as Lane>::floor(f32::NAN).is_nan());
+}

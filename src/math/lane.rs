@@ -266,7 +266,14 @@ impl Lane for f32 {
     }
     #[inline(always)]
     fn floor(self) -> Self {
-        f32::floor(self)
+        // By truncation: `f32::floor` is a libm call without SSE4.1 in the baseline ISA
+        // (table lookups floor each axis). Beyond 2^23 (and for NaN) `self` is integral.
+        if self.abs() < 8_388_608.0 {
+            let t = self as i32 as f32;
+            if t > self { t - 1.0 } else { t }
+        } else {
+            self
+        }
     }
     #[inline(always)]
     fn round(self) -> Self {
