@@ -98,10 +98,13 @@ fn closures(rng: &mut Rng) -> Vec<Closure> {
     ];
     let mut out = Vec::new();
     // Two closures per shape, with different parameters and frames, so groups mix
-    // closures of one shape (per-lane parameters) as well as shapes.
+    // closures of one shape (per-lane parameters) as well as shapes. The first copy's
+    // lobes share one frame (as a material's do, which in-place evals take once), the
+    // second's each have their own.
     for copy in 0..2 {
         for (mode, lobes) in &shapes {
             let wo = (copy == 1).then(|| sphere(rng));
+            let shared_frame = Frame::new(sphere(rng), None);
             let mut c = Closure::new(wo, *mode);
             for (name, block) in lobes {
                 let id = registry.find(name).unwrap();
@@ -112,7 +115,11 @@ fn closures(rng: &mut Rng) -> Vec<Closure> {
                     block.values[roughness] = (r + 0.1 * rng.f32()).min(1.0);
                 }
                 let weight = [0.3 + 0.7 * rng.f32(), 0.5, 0.9];
-                let frame = Frame::new(sphere(rng), None);
+                let frame = if copy == 0 {
+                    shared_frame
+                } else {
+                    Frame::new(sphere(rng), None)
+                };
                 c.add_lobe(&registry, id, weight, frame, Some(block.as_slice()))
                     .unwrap();
             }

@@ -20,7 +20,7 @@ use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
 use crate::kernels::{AlbedoJob, ClosureRows, Directions, EvalJob, LobeLanes, SampleJob, mixture};
 use crate::kernels::{
-    FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize, unpack_events,
+    FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize, to_local, unpack_events,
 };
 use crate::lobes::Sample;
 use crate::math::{Rgb, Vec3};
@@ -374,9 +374,12 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     let Some(closure) = in_place(input) else {
         return staged(start..end, out);
     };
-    // In place needs no scratch buffers: a chunk takes them only to be staged.
+    // In place needs no scratch buffers: a chunk takes them only to be staged. Its
+    // directions in a frame all its lobes share go on the stack.
+    let mut local = [[0.0f32; CHUNK]; 6];
     in_chunks(start..end, |chunk| {
-        if eval_in_place(kernels, closure, input.wo, wi, chunk.clone(), start, out) {
+        let (wo, range) = (input.wo, chunk.clone());
+        if eval_in_place(kernels, closure, wo, wi, range, start, &mut local, out) {
             Ok(())
         } else {
             staged(chunk, out)
@@ -441,6 +444,7 @@ fn uniform_lobe(closure: &Closure, k: usize) -> LobeLanes<'_> {
 /// Eval lanes `lanes` in place: the kernels read the caller's directions and write
 /// `out` (whose lane 0 is lane `base`). False when some direction needs the staged
 /// path's exact normalization or error (the outputs are then incomplete).
+#[allow(clippy::too_many_arguments)]
 fn eval_in_place(
     kernels: Kernels,
     closure: &Closure,
@@ -448,6 +452,7 @@ fn eval_in_place(
     wi: Soa3<'_>,
     lanes: Range<usize>,
     base: usize,
+    local_rows: &mut [[f32; CHUNK]; 6],
     out: &mut EvalBlockOutput<'_>,
 ) -> bool {
     let local = lanes.start - base..lanes.end - base;
@@ -463,12 +468,36 @@ fn eval_in_place(
         }
         return true;
     }
+    // Lobes that share one frame (a material's) take the directions into it once:
+    // normalized as `Directions::Raw` would, the same bits.
+    let first = closure.lobes()[0].frame;
+    let shared = closure.lobes().len() > 1 && closure.lobes().iter().all(|l| l.frame == first);
+    let n = lanes.len();
+    let (wo, wi, directions) = if shared {
+        let [a, b, c, d, e, f] = local_rows;
+        let (mut wo_local, mut wi_local) = (
+            [&mut a[..n], &mut b[..n], &mut c[..n]],
+            [&mut d[..n], &mut e[..n], &mut f[..n]],
+        );
+        if !to_local(kernels, &first, rows(wo, &lanes), &mut wo_local)
+            || !to_local(kernels, &first, rows(wi, &lanes), &mut wi_local)
+        {
+            return false;
+        }
+        let [a, b, c, d, e, f] = &*local_rows;
+        (
+            [&a[..n], &b[..n], &c[..n]],
+            [&d[..n], &e[..n], &f[..n]],
+            Directions::Local,
+        )
+    } else {
+        (rows(wo, &lanes), rows(wi, &lanes), Directions::Raw)
+    };
     for (k, l) in closure.lobes().iter().enumerate() {
-        let (wo, wi) = (rows(wo, &lanes), rows(wi, &lanes));
         let mut job = EvalJob {
-            len: lanes.len(),
+            len: n,
             mode: closure.transport(),
-            directions: Directions::Raw,
+            directions,
             wo,
             wi,
             lobe: uniform_lobe(closure, k),

@@ -105,6 +105,9 @@ pub enum Directions {
     /// given it back would normalize it (the sampled lobe's value is settled there, and
     /// a narrow lobe turns that last bit into a relative 1e-4 at alpha 0.001).
     Sampled,
+    /// Unit vectors already in the lobe's local frame ([`to_local`]: the lobes of a
+    /// closure that share one frame take it once): eval only.
+    Local,
 }
 
 impl Directions {
@@ -399,7 +402,7 @@ fn direction<L: Lane>(
 ) -> Vec3<L> {
     let d = load3(rows, i, n);
     match directions {
-        Directions::Unit => d,
+        Directions::Unit | Directions::Local => d,
         Directions::Sampled => d.normalize(),
         Directions::Raw => {
             let (unit, ok) = unit_in_range(d);
@@ -495,12 +498,12 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for EvalJob<'_> {
             &mut self.out_of_range,
         );
         let wi = direction(self.wi, i, n, self.directions, &mut self.out_of_range);
-        let e = M::eval(
-            p,
-            lanes.frame.to_local(wo),
-            lanes.frame.to_local(wi),
-            self.mode,
-        );
+        let (wo, wi) = if self.directions == Directions::Local {
+            (wo, wi)
+        } else {
+            (lanes.frame.to_local(wo), lanes.frame.to_local(wi))
+        };
+        let e = M::eval(p, wo, wi, self.mode);
         let (mut value, mut pdf) = (lanes.weight * e.value, lanes.probability * e.pdf);
         if let Some(excluded) = chosen_mask::<L>(self.except, i, n) {
             value = Rgb::select(excluded, Rgb::zero(), value);
@@ -626,6 +629,27 @@ fn normalize_body<L: Lane>(v: &mut [&mut [f32]; 3], len: usize) -> bool {
     any
 }
 
+/// The caller's directions `src` normalized as [`Directions::Raw`] normalizes them,
+/// then taken into `frame`, into `dst`; false when some lane's length is out of that
+/// range or not finite (the outputs are then incomplete).
+#[inline(always)]
+fn to_local_body<L: Lane>(frame: &Frame, src: [&[f32]; 3], dst: &mut [&mut [f32]; 3]) -> bool {
+    let len = src[0].len();
+    let frame = LaneFrame::<L>::splat(frame);
+    for i in (0..len).step_by(L::LANES) {
+        let n = L::LANES.min(len - i);
+        let (unit, ok) = unit_in_range(load3::<L>(src, i, n));
+        if !ok.all() {
+            return false;
+        }
+        let local = frame.to_local(unit);
+        for (c, row) in [local.x, local.y, local.z].into_iter().zip(dst.iter_mut()) {
+            store(c, row, i, n);
+        }
+    }
+    true
+}
+
 /// The lobe each lane's `u` chooses among `probabilities` ([`mixture::choose`]), as
 /// an index in `chosen`, and `u` rescaled for it in `reused`; false when some `u` is
 /// not finite or no lobe can be chosen (the outputs are then incomplete).
@@ -671,6 +695,10 @@ kernel!(
     /// albedo's `FresnelNodes` (a closure computes them when a conductor is added).
     /// `fresnel::conductor_with` has no fused operations, so every ISA gives the same bits.
     conductor_curve<>(eta: [f32; 3], k: [f32; 3], out: &mut [[f32; CURVE_LEN]; 3]) => conductor_curve_body
+);
+kernel!(
+    /// Directions into one frame (`to_local_body`).
+    to_local<>(frame: &Frame, src: [&[f32]; 3], dst: &mut [&mut [f32]; 3]) -> bool => to_local_body
 );
 kernel!(
     /// Choose the lobe of each lane of a shared closure (`choose_body`).
