@@ -23,7 +23,7 @@ use crate::kernels::{
     FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize, to_local, unpack_events,
 };
 use crate::lobes::Sample;
-use crate::math::{Rgb, Vec3};
+use crate::math::{Frame, Rgb, Vec3};
 use crate::simd::Kernels;
 use stage::{Randoms, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch};
 use std::fmt;
@@ -470,17 +470,16 @@ fn eval_in_place(
     }
     // Lobes that share one frame (a material's) take the directions into it once:
     // normalized as `Directions::Raw` would, the same bits.
-    let first = closure.lobes()[0].frame;
-    let shared = closure.lobes().len() > 1 && closure.lobes().iter().all(|l| l.frame == first);
     let n = lanes.len();
-    let (wo, wi, directions) = if shared {
+    let (wo, wi, directions) = if let Some(frame) = shared_frame(closure) {
         let [a, b, c, d, e, f] = local_rows;
         let (mut wo_local, mut wi_local) = (
             [&mut a[..n], &mut b[..n], &mut c[..n]],
             [&mut d[..n], &mut e[..n], &mut f[..n]],
         );
-        if !to_local(kernels, &first, rows(wo, &lanes), &mut wo_local)
-            || !to_local(kernels, &first, rows(wi, &lanes), &mut wi_local)
+        let raw = Directions::Raw;
+        if !to_local(kernels, &frame, raw, rows(wo, &lanes), &mut wo_local)
+            || !to_local(kernels, &frame, raw, rows(wi, &lanes), &mut wi_local)
         {
             return false;
         }
@@ -523,6 +522,14 @@ fn eval_in_place(
         }
     }
     true
+}
+
+/// The frame every lobe of `closure` has, when it has more than one lobe and they
+/// share it (a material's): in-place evals take their directions into it once
+/// ([`Directions::Local`]).
+fn shared_frame(closure: &Closure) -> Option<Frame> {
+    let (first, rest) = closure.lobes().split_first()?;
+    (!rest.is_empty() && rest.iter().all(|l| l.frame == first.frame)).then_some(first.frame)
 }
 
 /// Eval lanes `range` through grouping and staging; `out`'s lane 0 is lane `base`.
@@ -1109,14 +1116,42 @@ fn mixture_in_place(
         }
         s.pdf[j] = probabilities[k] * s.sample_pdf[j];
     }
+    // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
+    // their jobs would (`Directions::Sampled`), into the compact rows (free now).
+    let directions = match shared_frame(closure) {
+        Some(frame) => {
+            let c = &mut s.compact;
+            let unit = to_local(
+                kernels,
+                &frame,
+                Directions::Unit,
+                view3(&s.wo, n),
+                &mut rows3(&mut c.wo, n),
+            );
+            let sampled = to_local(
+                kernels,
+                &frame,
+                Directions::Sampled,
+                view3(&s.wi, n),
+                &mut rows3(&mut c.wi, n),
+            );
+            debug_assert!(unit && sampled, "only raw directions can be out of range");
+            Directions::Local
+        }
+        None => Directions::Sampled,
+    };
+    let (wo_rows, wi_rows) = match directions {
+        Directions::Local => (&s.compact.wo, &s.compact.wi),
+        _ => (&s.wo, &s.wi),
+    };
     for (k, l) in closure.lobes().iter().enumerate() {
         let [vr, vg, vb] = &mut s.value;
         let mut job = EvalJob {
             len: n,
             mode: closure.transport(),
-            directions: Directions::Sampled,
-            wo: view3(&s.wo, n),
-            wi: view3(&s.wi, n),
+            directions,
+            wo: view3(wo_rows, n),
+            wi: view3(wi_rows, n),
             lobe: uniform_lobe(closure, k),
             store: false,
             value: Some([&mut vr[..n], &mut vg[..n], &mut vb[..n]]),

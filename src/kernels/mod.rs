@@ -106,7 +106,7 @@ pub enum Directions {
     /// a narrow lobe turns that last bit into a relative 1e-4 at alpha 0.001).
     Sampled,
     /// Unit vectors already in the lobe's local frame ([`to_local`]: the lobes of a
-    /// closure that share one frame take it once): eval only.
+    /// closure that share one frame take them into it once): eval only.
     Local,
 }
 
@@ -629,17 +629,23 @@ fn normalize_body<L: Lane>(v: &mut [&mut [f32]; 3], len: usize) -> bool {
     any
 }
 
-/// The caller's directions `src` normalized as [`Directions::Raw`] normalizes them,
-/// then taken into `frame`, into `dst`; false when some lane's length is out of that
-/// range or not finite (the outputs are then incomplete).
+/// The directions `src`, arriving as `directions` says and normalized as a job's
+/// would be, taken into `frame`, into `dst`; false when some lane's length is out of
+/// [`Directions::Raw`]'s range (the outputs are then incomplete).
 #[inline(always)]
-fn to_local_body<L: Lane>(frame: &Frame, src: [&[f32]; 3], dst: &mut [&mut [f32]; 3]) -> bool {
+fn to_local_body<L: Lane>(
+    frame: &Frame,
+    directions: Directions,
+    src: [&[f32]; 3],
+    dst: &mut [&mut [f32]; 3],
+) -> bool {
     let len = src[0].len();
     let frame = LaneFrame::<L>::splat(frame);
+    let mut out_of_range = false;
     for i in (0..len).step_by(L::LANES) {
         let n = L::LANES.min(len - i);
-        let (unit, ok) = unit_in_range(load3::<L>(src, i, n));
-        if !ok.all() {
+        let unit = direction::<L>(src, i, n, directions, &mut out_of_range);
+        if out_of_range {
             return false;
         }
         let local = frame.to_local(unit);
@@ -698,7 +704,7 @@ kernel!(
 );
 kernel!(
     /// Directions into one frame (`to_local_body`).
-    to_local<>(frame: &Frame, src: [&[f32]; 3], dst: &mut [&mut [f32]; 3]) -> bool => to_local_body
+    to_local<>(frame: &Frame, directions: Directions, src: [&[f32]; 3], dst: &mut [&mut [f32]; 3]) -> bool => to_local_body
 );
 kernel!(
     /// Choose the lobe of each lane of a shared closure (`choose_body`).
