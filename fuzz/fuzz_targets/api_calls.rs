@@ -821,6 +821,12 @@ fn param_info() -> glint_param_info {
         choice_count: 0,
         choices: null(),
         doc: null(),
+        shape: 0,
+        parent: 0,
+        member_count: 0,
+        capacity: 0,
+        count_offset: 0,
+        default_count: 0,
     }
 }
 
