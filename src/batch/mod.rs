@@ -1118,7 +1118,7 @@ fn mixture_in_place(
     }
     // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
     // their jobs would (`Directions::Sampled`), into the compact rows (free now).
-    let directions = match shared_frame(closure) {
+    let (wo_rows, wi_rows, directions) = match shared_frame(closure) {
         Some(frame) => {
             let c = &mut s.compact;
             let unit = to_local(
@@ -1136,13 +1136,9 @@ fn mixture_in_place(
                 &mut rows3(&mut c.wi, n),
             );
             debug_assert!(unit && sampled, "only raw directions can be out of range");
-            Directions::Local
+            (&c.wo, &c.wi, Directions::Local)
         }
-        None => Directions::Sampled,
-    };
-    let (wo_rows, wi_rows) = match directions {
-        Directions::Local => (&s.compact.wo, &s.compact.wi),
-        _ => (&s.wo, &s.wi),
+        None => (&s.wo, &s.wi, Directions::Sampled),
     };
     for (k, l) in closure.lobes().iter().enumerate() {
         let [vr, vg, vb] = &mut s.value;

@@ -56,11 +56,6 @@ impl<L: Lane> Ndf<L> for Beckmann<L> {
 
 impl<L: Lane> SmithNdf<L> for Beckmann<L> {
     #[inline(always)]
-    fn from_alpha(alpha_x: L, alpha_y: L) -> Self {
-        Self { alpha_x, alpha_y }
-    }
-
-    #[inline(always)]
     fn alpha(&self) -> (L, L) {
         (self.alpha_x, self.alpha_y)
     }

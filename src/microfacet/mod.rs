@@ -47,7 +47,6 @@ pub trait Ndf<L: Lane>: Copy {
 /// [`Ndf::sample`] samples visible normals and [`Ndf::pdf`] is
 /// [`SmithNdf::pdf_visible`].
 pub trait SmithNdf<L: Lane>: Ndf<L> {
-    fn from_alpha(alpha_x: L, alpha_y: L) -> Self;
     fn alpha(&self) -> (L, L);
 
     /// `Lambda(w) |w.z|`: Smith's `Lambda` times the cosine, the projected area of the
@@ -176,7 +175,8 @@ pub fn burley_alpha<L: Lane>(roughness: L, anisotropic: L, min: f32) -> (L, L) {
 
 /// The Smith distributions a lobe can choose at run time, in choice order: each entry is
 /// `Variant "choice name"`, where `Variant` names both the [`NdfKind`] variant and the
-/// type (re-exported from this module). Invokes `$then!` with the list, so that every
+/// type (re-exported from this module, a struct of public `alpha_x` and `alpha_y`, from
+/// which the dispatch builds it). Invokes `$then!` with the list, so that every
 /// closed list over them (the kind enum, its dispatch, the albedo table files) is
 /// generated from this one.
 macro_rules! smith_ndfs {
@@ -218,7 +218,10 @@ macro_rules! dispatch {
     ({ $dist:expr, $n:ident => $body:expr } $($variant:ident $name:literal),+) => {
         match $dist.kind {
             $(NdfKind::$variant => {
-                let $n = $variant::from_alpha($dist.alpha_x, $dist.alpha_y);
+                let $n = $variant {
+                    alpha_x: $dist.alpha_x,
+                    alpha_y: $dist.alpha_y,
+                };
                 $body
             })+
         }
@@ -266,15 +269,6 @@ impl<L: Lane> Ndf<L> for Distribution<L> {
 }
 
 impl<L: Lane> SmithNdf<L> for Distribution<L> {
-    #[inline(always)]
-    fn from_alpha(alpha_x: L, alpha_y: L) -> Self {
-        Self {
-            kind: NdfKind::ALL[0],
-            alpha_x,
-            alpha_y,
-        }
-    }
-
     #[inline(always)]
     fn alpha(&self) -> (L, L) {
         (self.alpha_x, self.alpha_y)
