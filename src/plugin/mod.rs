@@ -27,6 +27,8 @@
 
 pub mod abi;
 mod intern;
+#[cfg(test)]
+mod tests;
 
 use crate::error::{Error, Status};
 use crate::kernels::{self, EvalJob};
@@ -129,13 +131,13 @@ pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
 
 /// Validate the table a plugin's entry handed over for ABI `version` (1 or 2) and
 /// register its lobe types, all or none; returns their ids. `origin` names the plugin
-/// in messages. [`load`] calls this with a library's table; tests call it with tables
+/// in messages. [`load`] calls this with a library's table; the unit tests with tables
 /// declared in Rust.
 ///
 /// # Safety
 /// `table` is NULL or a table of ABI `version` whose pointers are NULL or valid as
 /// glint_plugin.h requires of a plugin, for as long as the registered types live.
-pub unsafe fn register_table(
+unsafe fn register_table(
     registry: &mut Registry,
     version: u32,
     table: *const c_void,
