@@ -58,6 +58,7 @@ extern "C" {
 
 /* The ABI versions this header describes. */
 #define GLINT_PLUGIN_ABI_V1 1u
+#define GLINT_PLUGIN_ABI_V2 2u
 
 /* The name of the one symbol a plugin exports. */
 #define GLINT_PLUGIN_ENTRY_SYMBOL "glint_plugin_entry"
@@ -149,11 +150,72 @@ typedef struct glint_plugin_v1 {
     const glint_plugin_lobe_v1 *lobes;
 } glint_plugin_v1;
 
+/* ---- ABI version 2: samples report their class and component ----------------------- */
+
+/* The class of a sample (glint_plugin_sample_v2.sample_class): the same values as
+ * glint.h's GLINT_FLAG_DIFFUSE, _GLOSSY and _SPECULAR, and as GLINT_PLUGIN_FLAG_*. */
+#define GLINT_PLUGIN_CLASS_DIFFUSE 4u
+#define GLINT_PLUGIN_CLASS_GLOSSY 8u
+#define GLINT_PLUGIN_CLASS_SPECULAR 16u
+
+/* What a version-2 sample fills in: version 1's fields, then the sample's own class and
+ * the component (sub-lobe) it came from, which Glint reports to the host as it does for
+ * built-in lobes (glint_sample_result's flags and component, the sample batch's
+ * component array). Rules, each repaired and counted like the outputs above when broken
+ * (the class becomes the one a version-1 sample of the type reports, the component 0):
+ *  - sample_class is exactly one GLINT_PLUGIN_CLASS_*, and one the lobe's flags declare;
+ *  - GLINT_PLUGIN_CLASS_SPECULAR exactly when events has GLINT_PLUGIN_EVENT_DELTA;
+ *  - component < the lobe's component_count. */
+typedef struct glint_plugin_sample_v2 {
+    uint32_t struct_size;  /* set by Glint to sizeof(glint_plugin_sample_v2) before the call */
+    float wi[3];           /* unit, local frame */
+    float value[3];        /* f |cos theta_i| (delta: the scattered fraction) */
+    float pdf;             /* solid-angle pdf (delta: the discrete probability) */
+    uint32_t events;       /* GLINT_PLUGIN_EVENT_* */
+    float eta;             /* relative IOR crossed by a transmitted sample, else 1 */
+    float roughness;       /* in [0, 1], 0 for delta events: a hint for path regularization */
+    uint32_t sample_class; /* GLINT_PLUGIN_CLASS_* (not `class`: a C++ keyword) */
+    uint32_t component;    /* the sub-lobe sampled, < the lobe's component_count */
+} glint_plugin_sample_v2;
+
+/* A lobe type, ABI version 2: version 1's fields (sample writes the version-2 sample),
+ * then the number of components. `flags` must include at least one class bit (DIFFUSE,
+ * GLOSSY or SPECULAR), the classes samples may report. */
+typedef struct glint_plugin_lobe_v2 {
+    uint32_t struct_size; /* sizeof(glint_plugin_lobe_v2) */
+    const char *name;     /* unique among all lobe types: [a-z0-9_]+ */
+    const char *summary;  /* one line */
+    uint32_t flags;       /* every GLINT_PLUGIN_FLAG_* a sample may carry */
+    uint32_t reciprocal;  /* 1 when f(wo, wi) == f(wi, wo) in radiance transport */
+    const glint_plugin_param *params;
+    uint32_t param_count;
+    uint32_t block_size;  /* bytes of the parameter block (sizeof your struct) */
+    uint32_t block_align; /* its alignment (4: floats) */
+    void (*eval)(const void *params, const float wo[3], const float wi[3], uint32_t transport,
+                 float value[3], float *pdf);
+    int32_t (*sample)(const void *params, const float wo[3], const float u[3],
+                      uint32_t transport, glint_plugin_sample_v2 *out);
+    void (*albedo)(const void *params, const float wo[3], uint32_t transport, float albedo[3]);
+    /* Optional (NULL: Glint loops over eval). */
+    void (*eval_batch)(const glint_plugin_eval_batch *batch);
+    uint32_t component_count; /* 1 ..= 65536: components are 0 .. component_count - 1 */
+} glint_plugin_lobe_v2;
+
+/* The table a version-2 plugin hands to Glint; it must stay valid forever. */
+typedef struct glint_plugin_v2 {
+    uint32_t struct_size; /* sizeof(glint_plugin_v2) */
+    const char *name;     /* the plugin's name, for messages */
+    uint32_t lobe_count;
+    const glint_plugin_lobe_v2 *lobes;
+} glint_plugin_v2;
+
 /*
  * The entry point. `host_abi_version` is the newest ABI version Glint speaks. Return 0
  * after setting `*plugin_abi_version` to the version you implement (at most the host's)
- * and `*table` to that version's table (a `const glint_plugin_v1 *` for version 1); return
- * nonzero to refuse (for example when the host is too old).
+ * and `*table` to that version's table (a `const glint_plugin_v1 *` for version 1, a
+ * `const glint_plugin_v2 *` for version 2); return nonzero to refuse (for example when the
+ * host is too old). Glint passes GLINT_PLUGIN_ABI_V2 and accepts either answer; a
+ * version-1 plugin's samples report the lobe type's class and component 0.
  */
 typedef int32_t (*glint_plugin_entry_fn)(uint32_t host_abi_version,
                                          uint32_t *plugin_abi_version, const void **table);

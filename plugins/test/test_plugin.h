@@ -74,4 +74,47 @@ static inline void test_albedo(const void *params, const float wo[3], uint32_t t
         return 0;                                                                          \
     }
 
+/* ---- ABI version 2 ---------------------------------------------------------------------- */
+
+/* The test lobe's sample as a version-2 sample of class DIFFUSE, component 0. */
+static inline int32_t test_sample_v2(const void *params, const float wo[3], const float u[3],
+                                     uint32_t transport, glint_plugin_sample_v2 *out)
+{
+    glint_plugin_sample v1;
+    if (!test_sample(params, wo, u, transport, &v1))
+        return 0;
+    out->wi[0] = v1.wi[0], out->wi[1] = v1.wi[1], out->wi[2] = v1.wi[2];
+    out->value[0] = v1.value[0], out->value[1] = v1.value[1], out->value[2] = v1.value[2];
+    out->pdf = v1.pdf;
+    out->events = v1.events;
+    out->eta = v1.eta;
+    out->roughness = v1.roughness;
+    out->sample_class = GLINT_PLUGIN_CLASS_DIFFUSE;
+    out->component = 0;
+    return 1;
+}
+
+/* A version-2 test lobe with the given name, flags, sample callback and component count. */
+#define TEST_LOBE_V2(name_, flags_, sample_, component_count_)                             \
+    {                                                                                      \
+        sizeof(glint_plugin_lobe_v2), name_, "a version-2 test lobe", flags_, 1,           \
+            test_params, sizeof test_params / sizeof test_params[0], sizeof(float), 4,     \
+            test_eval, sample_, test_albedo, NULL, component_count_                        \
+    }
+
+/* The version-2 table and an entry point that hands it over. */
+#define TEST_PLUGIN_V2_ENTRY(lobes_)                                                       \
+    static const glint_plugin_v2 test_plugin = {                                           \
+        sizeof(glint_plugin_v2), "glint_test_v2", sizeof lobes_ / sizeof lobes_[0], lobes_};   \
+    GLINT_PLUGIN_EXPORT int32_t glint_plugin_entry(uint32_t host_abi_version,              \
+                                                   uint32_t *plugin_abi_version,           \
+                                                   const void **table)                     \
+    {                                                                                      \
+        if (host_abi_version < GLINT_PLUGIN_ABI_V2)                                        \
+            return 1;                                                                      \
+        *plugin_abi_version = GLINT_PLUGIN_ABI_V2;                                         \
+        *table = &test_plugin;                                                             \
+        return 0;                                                                          \
+    }
+
 #endif /* GLINT_TEST_PLUGIN_H */

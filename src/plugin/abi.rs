@@ -1,12 +1,12 @@
-//! Rust mirrors of `include/glint_plugin.h`, ABI version 1. Field order and types
+//! Rust mirrors of `include/glint_plugin.h`, ABI versions 1 and 2. Field order and types
 //! must match the header exactly: plugins set every `struct_size` from the C
 //! compiler's `sizeof`, and the loader refuses sizes smaller than these (so the
 //! C tests that load the example plugins check the two agree).
 
 use std::ffi::c_char;
 
-/// The newest plugin ABI version this library speaks.
-pub const HOST_ABI_VERSION: u32 = 1;
+/// The newest plugin ABI version this library speaks (it loads every older one too).
+pub const HOST_ABI_VERSION: u32 = 2;
 
 pub const PARAM_FLOAT: u32 = 0;
 pub const PARAM_RGB: u32 = 1;
@@ -103,6 +103,55 @@ pub struct PluginV1 {
     pub name: *const c_char,
     pub lobe_count: u32,
     pub lobes: *const LobeV1,
+}
+
+/// `glint_plugin_sample_v2`: V1's fields after `struct_size`, then class and component.
+#[repr(C)]
+#[derive(Default)]
+pub struct SampleV2 {
+    pub struct_size: u32,
+    pub wi: [f32; 3],
+    pub value: [f32; 3],
+    pub pdf: f32,
+    pub events: u32,
+    pub eta: f32,
+    pub roughness: f32,
+    pub sample_class: u32,
+    pub component: u32,
+}
+
+pub type SampleV2Fn = unsafe extern "C" fn(
+    params: *const std::ffi::c_void,
+    wo: *const [f32; 3],
+    u: *const [f32; 3],
+    transport: u32,
+    out: *mut SampleV2,
+) -> i32;
+
+#[repr(C)]
+pub struct LobeV2 {
+    pub struct_size: u32,
+    pub name: *const c_char,
+    pub summary: *const c_char,
+    pub flags: u32,
+    pub reciprocal: u32,
+    pub params: *const Param,
+    pub param_count: u32,
+    pub block_size: u32,
+    pub block_align: u32,
+    pub eval: Option<EvalFn>,
+    pub sample: Option<SampleV2Fn>,
+    pub albedo: Option<AlbedoFn>,
+    pub eval_batch: Option<EvalBatchFn>,
+    pub component_count: u32,
+}
+
+#[repr(C)]
+pub struct PluginV2 {
+    pub struct_size: u32,
+    pub name: *const c_char,
+    pub lobe_count: u32,
+    pub lobes: *const LobeV2,
 }
 
 pub type EntryFn = unsafe extern "C" fn(

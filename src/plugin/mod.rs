@@ -1,6 +1,6 @@
 //! Plugin lobe types: shared libraries built against `include/glint_plugin.h` that
 //! export `glint_plugin_entry`. [`load`] opens one with libloading, negotiates the ABI
-//! version, validates every lobe declaration and parameter table, and only then
+//! version (1 or 2: [`register_table`] reads either table), validates every lobe declaration and parameter table, and only then
 //! registers the lobe types, so a failure never leaves a half-registered plugin.
 //! Libraries are never unloaded (unloading code with thread-local state crashes); the
 //! lobe records Glint allocates for them are shared by the registry and the closures
@@ -18,14 +18,21 @@
 //!   `PLUGIN_MAX_VALUE / PLUGIN_MIN_PDF` = 1e28 per unit of lobe weight;
 //! - every callback gets a copy of the closure's parameter block, so a plugin that
 //!   writes to its `const` block cannot change a finished closure; a call that wrote
-//!   is counted.
+//!   is counted;
+//! - a version-2 sample's class that is not one of the three, not among the type's
+//!   flags or not SPECULAR exactly for delta events becomes the type's class (what a
+//!   version-1 sample reports), a component beyond the type's `component_count` becomes
+//!   0 (each counted). What can be checked statically (struct sizes, a class among the
+//!   flags, `component_count` in range) is checked at load.
 
 pub mod abi;
 mod intern;
+#[cfg(test)]
+mod tests;
 
 use crate::error::{Error, Status};
 use crate::kernels::{self, EvalJob};
-use crate::lobes::{Eval, LobeType, Sample, Transport, VerifyCase, class_of, flags};
+use crate::lobes::{Eval, LobeType, MAX_COMPONENT, Sample, Transport, VerifyCase, class_of, flags};
 use crate::math::{Rgb, Vec3};
 use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::{LobeRef, Registry};
@@ -106,7 +113,7 @@ pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
             ),
         ));
     }
-    if version != HOST_ABI_VERSION {
+    if !(1..=HOST_ABI_VERSION).contains(&version) {
         return Err(Error::new(
             Status::PluginAbiRefused,
             format!(
@@ -114,48 +121,118 @@ pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
             ),
         ));
     }
+    // SAFETY: the entry answered `version` with that version's table, which lives as
+    // long as the library (glint_plugin.h), and the library is never unloaded below.
+    let ids = unsafe { register_table(registry, version, table, &shown.to_string()) }?;
+    // Never unloaded: the lobe types' callbacks point into the library.
+    std::mem::forget(library);
+    Ok(ids)
+}
+
+/// Validate the table a plugin's entry handed over for ABI `version` (1 or 2) and
+/// register its lobe types, all or none; returns their ids. `origin` names the plugin
+/// in messages. [`load`] calls this with a library's table; the unit tests with tables
+/// declared in Rust.
+///
+/// # Safety
+/// `table` is NULL or a table of ABI `version` whose pointers are NULL or valid as
+/// glint_plugin.h requires of a plugin, for as long as the registered types live.
+unsafe fn register_table(
+    registry: &mut Registry,
+    version: u32,
+    table: *const c_void,
+    origin: &str,
+) -> Result<Vec<u32>, Error> {
     let malformed =
-        |what: String| Error::new(Status::PluginParams, format!("plugin {shown}: {what}"));
-    // SAFETY: a version-1 plugin hands out a `glint_plugin_v1` table that lives forever
-    // (glint_plugin.h); NULL is checked.
-    let table = unsafe { (table as *const abi::PluginV1).as_ref() }
-        .ok_or_else(|| malformed("glint_plugin_entry returned no table".into()))?;
-    if (table.struct_size as usize) < size_of::<abi::PluginV1>() {
-        return Err(malformed(format!(
-            "glint_plugin_v1.struct_size {} < {}",
-            table.struct_size,
-            size_of::<abi::PluginV1>()
-        )));
-    }
-    if table.lobe_count > 0 && table.lobes.is_null() {
-        return Err(malformed("lobes is NULL".into()));
-    }
-    let mut lobes = Vec::with_capacity(table.lobe_count as usize);
-    for i in 0..table.lobe_count as usize {
-        // SAFETY: `lobes` holds `lobe_count` declarations (checked non-NULL above).
-        let decl = unsafe { &*table.lobes.add(i) };
-        let lobe = PluginLobe::new(decl).map_err(|e| {
-            Error::new(e.status, format!("plugin {shown}: lobe {i}: {}", e.message))
-        })?;
-        if registry.find(lobe.name).is_ok()
-            || lobes.iter().any(|l: &PluginLobe| l.name == lobe.name)
-        {
+        |what: String| Error::new(Status::PluginParams, format!("plugin {origin}: {what}"));
+    let lobes = match version {
+        // SAFETY: the caller's contract: a version-1 table (NULL checked by `table_lobes`).
+        1 => unsafe {
+            table_lobes(table.cast::<abi::PluginV1>(), "glint_plugin_v1", |t| {
+                (t.struct_size, t.lobe_count, t.lobes)
+            })
+        }
+        .map_err(malformed)
+        .and_then(|decls| checked_lobes(decls, Decl::v1, origin)),
+        // SAFETY: as above, a version-2 table.
+        2 => unsafe {
+            table_lobes(table.cast::<abi::PluginV2>(), "glint_plugin_v2", |t| {
+                (t.struct_size, t.lobe_count, t.lobes)
+            })
+        }
+        .map_err(malformed)
+        .and_then(|decls| checked_lobes(decls, Decl::v2, origin)),
+        v => Err(Error::new(
+            Status::PluginAbiRefused,
+            format!("plugin {origin}: ABI version {v} is not one this library speaks"),
+        )),
+    }?;
+    let mut checked: Vec<PluginLobe> = Vec::with_capacity(lobes.len());
+    for lobe in lobes {
+        if registry.find(lobe.name).is_ok() || checked.iter().any(|l| l.name == lobe.name) {
             return Err(Error::new(
                 Status::DuplicateName,
                 format!(
-                    "plugin {shown}: a lobe type named \"{}\" is already registered",
+                    "plugin {origin}: a lobe type named \"{}\" is already registered",
                     lobe.name
                 ),
             ));
         }
-        lobes.push(lobe);
+        checked.push(lobe);
     }
-    // Never unloaded: the lobe types' callbacks point into the library.
-    std::mem::forget(library);
-    lobes
+    checked
         .into_iter()
         .map(|l| registry.register(LobeRef::Shared(Arc::new(l))))
         .collect()
+}
+
+/// Each declaration of `decls`, validated through `decl`; the first failure names its lobe.
+fn checked_lobes<L>(
+    decls: &[L],
+    decl: fn(&L) -> Result<Decl, Error>,
+    origin: &str,
+) -> Result<Vec<PluginLobe>, Error> {
+    decls
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            decl(d).and_then(PluginLobe::new).map_err(|e| {
+                Error::new(
+                    e.status,
+                    format!("plugin {origin}: lobe {i}: {}", e.message),
+                )
+            })
+        })
+        .collect()
+}
+
+/// The lobe declarations of a plugin table of type `T` (`what` in messages), whose
+/// `fields` are its struct_size, lobe_count and lobes; NULL and short tables refused.
+///
+/// # Safety
+/// `table` is NULL or valid for reads of `T`, and its lobes hold lobe_count entries.
+unsafe fn table_lobes<'a, T, L>(
+    table: *const T,
+    what: &str,
+    fields: impl Fn(&T) -> (u32, u32, *const L),
+) -> Result<&'a [L], String> {
+    // SAFETY: the caller's contract; NULL is checked.
+    let table = unsafe { table.as_ref() }.ok_or("glint_plugin_entry returned no table")?;
+    let (struct_size, count, lobes) = fields(table);
+    if (struct_size as usize) < size_of::<T>() {
+        return Err(format!(
+            "{what}.struct_size {struct_size} < {}",
+            size_of::<T>()
+        ));
+    }
+    if count == 0 {
+        return Ok(&[]);
+    }
+    if lobes.is_null() {
+        return Err("lobes is NULL".into());
+    }
+    // SAFETY: `lobes` holds `count` declarations (non-NULL checked above).
+    Ok(unsafe { std::slice::from_raw_parts(lobes, count as usize) })
 }
 
 /// Validate one lobe declaration exactly as [`load`] does, registering nothing: the
@@ -164,7 +241,7 @@ pub fn load(registry: &mut Registry, path: &Path) -> Result<Vec<u32>, Error> {
 /// # Safety
 /// Every pointer in `decl` is NULL or valid as glint_plugin.h requires of a plugin.
 pub unsafe fn validate_declaration(decl: &abi::LobeV1) -> Result<(), Error> {
-    PluginLobe::new(decl).map(drop)
+    Decl::v1(decl).and_then(PluginLobe::new).map(drop)
 }
 
 /// Every `*.so` file in `dir`, in file-name order.
@@ -194,7 +271,7 @@ pub struct PluginLobe {
     flags: u32,
     reciprocal: bool,
     eval: abi::EvalFn,
-    sample: abi::SampleFn,
+    sample: Sampler,
     albedo: abi::AlbedoFn,
     eval_batch: Option<abi::EvalBatchFn>,
     /// Each float parameter at its minimum and at its maximum, for the harness.
@@ -229,20 +306,90 @@ fn identifier(p: *const c_char, what: &str) -> Result<&'static str, Error> {
     Ok(s)
 }
 
-const ALL_FLAGS: u32 =
-    flags::REFLECTION | flags::TRANSMISSION | flags::DIFFUSE | flags::GLOSSY | flags::SPECULAR;
+const CLASSES: u32 = flags::DIFFUSE | flags::GLOSSY | flags::SPECULAR;
+const ALL_FLAGS: u32 = flags::REFLECTION | flags::TRANSMISSION | CLASSES;
+
+/// Most components a version-2 lobe may declare: samples report 0 ..= MAX_COMPONENT.
+const MAX_COMPONENTS: u32 = MAX_COMPONENT as u32 + 1;
+
+/// A version's `sample` callback: V1 samples carry no class or component.
+#[derive(Clone, Copy)]
+enum Sampler {
+    V1(abi::SampleFn),
+    V2 {
+        sample: abi::SampleV2Fn,
+        component_count: u32,
+    },
+}
+
+/// The fields every ABI version's lobe declaration has, read after its struct_size
+/// was checked; `sample` is None when the plugin left it NULL.
+struct Decl {
+    name: *const c_char,
+    summary: *const c_char,
+    flags: u32,
+    reciprocal: u32,
+    params: *const abi::Param,
+    param_count: u32,
+    block_size: u32,
+    block_align: u32,
+    eval: Option<abi::EvalFn>,
+    sample: Option<Sampler>,
+    albedo: Option<abi::AlbedoFn>,
+    eval_batch: Option<abi::EvalBatchFn>,
+}
+
+/// Refuse a declaration whose struct_size is below the size of `T`.
+fn struct_size<T>(size: u32, what: &str) -> Result<(), Error> {
+    if (size as usize) < size_of::<T>() {
+        return Err(Error::new(
+            Status::PluginParams,
+            format!("{what}.struct_size {size} < {}", size_of::<T>()),
+        ));
+    }
+    Ok(())
+}
+
+/// A [`Decl`] of the fields V1 and V2 declarations share, with `sample` the version's.
+macro_rules! decl {
+    ($d:expr, $sample:expr) => {
+        Decl {
+            name: $d.name,
+            summary: $d.summary,
+            flags: $d.flags,
+            reciprocal: $d.reciprocal,
+            params: $d.params,
+            param_count: $d.param_count,
+            block_size: $d.block_size,
+            block_align: $d.block_align,
+            eval: $d.eval,
+            sample: $sample,
+            albedo: $d.albedo,
+            eval_batch: $d.eval_batch,
+        }
+    };
+}
+
+impl Decl {
+    fn v1(d: &abi::LobeV1) -> Result<Decl, Error> {
+        struct_size::<abi::LobeV1>(d.struct_size, "glint_plugin_lobe_v1")?;
+        Ok(decl!(d, d.sample.map(Sampler::V1)))
+    }
+
+    fn v2(d: &abi::LobeV2) -> Result<Decl, Error> {
+        struct_size::<abi::LobeV2>(d.struct_size, "glint_plugin_lobe_v2")?;
+        let sample = d.sample.map(|sample| Sampler::V2 {
+            sample,
+            component_count: d.component_count,
+        });
+        Ok(decl!(d, sample))
+    }
+}
 
 impl PluginLobe {
     /// Validate a declaration.
-    fn new(d: &abi::LobeV1) -> Result<PluginLobe, Error> {
+    fn new(d: Decl) -> Result<PluginLobe, Error> {
         let bad = |m: String| Error::new(Status::PluginParams, m);
-        if (d.struct_size as usize) < size_of::<abi::LobeV1>() {
-            return Err(bad(format!(
-                "glint_plugin_lobe_v1.struct_size {} < {}",
-                d.struct_size,
-                size_of::<abi::LobeV1>()
-            )));
-        }
         let name = identifier(d.name, "name")?;
         let summary = plugin_str(d.summary, "summary")?;
         let context = |e: Error| Error::new(e.status, format!("{name}: {}", e.message));
@@ -257,10 +404,26 @@ impl PluginLobe {
                 d.flags
             )));
         }
+        if let Sampler::V2 {
+            component_count, ..
+        } = sample
+        {
+            if d.flags & CLASSES == 0 {
+                return Err(bad(format!(
+                    "{name}: flags {:#x}: a version-2 lobe declares the classes its samples report (DIFFUSE, GLOSSY or SPECULAR)",
+                    d.flags
+                )));
+            }
+            if !(1..=MAX_COMPONENTS).contains(&component_count) {
+                return Err(bad(format!(
+                    "{name}: component_count {component_count} is not in 1..={MAX_COMPONENTS}"
+                )));
+            }
+        }
         if d.reciprocal > 1 {
             return Err(bad(format!("{name}: reciprocal must be 0 or 1")));
         }
-        let params = param_table(d).map_err(context)?;
+        let params = param_table(&d).map_err(context)?;
         let floats = params::block_size(&params);
         if d.block_size as usize != 4 * floats || d.block_align != 4 {
             return Err(Error::new(
@@ -323,6 +486,26 @@ impl PluginLobe {
         Rgb::new(self.clean(c[0]), self.clean(c[1]), self.clean(c[2]))
     }
 
+    /// A sample's class and component: a V2 sample's own (`reported`: class,
+    /// component and the type's component_count) where they keep the rules of
+    /// glint_plugin_sample_v2, else (counted) what a V1 sample reports, the type's class
+    /// from `class_of` and component 0.
+    fn class_and_component(&self, delta: bool, reported: Option<(u32, u32, u32)>) -> (f32, f32) {
+        let fallback = class_of::<f32>(delta, self.flags);
+        let Some((class, component, component_count)) = reported else {
+            return (fallback, 0.0);
+        };
+        let class_ok = matches!(class, flags::DIFFUSE | flags::GLOSSY | flags::SPECULAR)
+            && class & self.flags != 0
+            && (class == flags::SPECULAR) == delta;
+        let component_ok = component < component_count;
+        self.count(u64::from(!class_ok) + u64::from(!component_ok));
+        (
+            if class_ok { class as f32 } else { fallback },
+            if component_ok { component as f32 } else { 0.0 },
+        )
+    }
+
     /// Call `f` with a private copy of the parameter block `params`: a plugin may
     /// write through its `const` pointer, and the closure's block must not change.
     /// A copy costs a few nanoseconds for a typical block (a checksum would read the
@@ -351,7 +534,7 @@ fn same_bits(a: &[f32], b: &[f32]) -> bool {
 }
 
 /// The parameter table as a schema, checked: the packed layout in table order.
-fn param_table(d: &abi::LobeV1) -> Result<Box<[ParamSpec]>, Error> {
+fn param_table(d: &Decl) -> Result<Box<[ParamSpec]>, Error> {
     let bad = |m: String| Error::new(Status::PluginParams, m);
     if d.param_count > 0 && d.params.is_null() {
         return Err(bad("params is NULL".into()));
@@ -495,11 +678,44 @@ impl LobeType for PluginLobe {
     }
 
     fn sample(&self, params: &[f32], wo: Vec3<f32>, u: [f32; 3], mode: Transport) -> Sample<f32> {
-        let mut s = abi::Sample::default();
-        // SAFETY: as in `eval`.
-        let produced = self.with_block(params, |block| unsafe {
-            (self.sample)(block, &[wo.x, wo.y, wo.z], &u, transport(mode), &mut s)
-        });
+        let wo = [wo.x, wo.y, wo.z];
+        let (produced, s, reported) = match self.sample {
+            Sampler::V1(sample) => {
+                let mut s = abi::Sample::default();
+                // SAFETY: the callback was checked non-NULL; `block` is a copy of this
+                // type's validated block; every pointer is valid for the call.
+                let produced = self.with_block(params, |block| unsafe {
+                    sample(block, &wo, &u, transport(mode), &mut s)
+                });
+                (produced, s, None)
+            }
+            Sampler::V2 {
+                sample,
+                component_count,
+            } => {
+                let mut s = abi::SampleV2 {
+                    struct_size: size_of::<abi::SampleV2>() as u32,
+                    ..Default::default()
+                };
+                // SAFETY: as above, with the version-2 sample the callback writes.
+                let produced = self.with_block(params, |block| unsafe {
+                    sample(block, &wo, &u, transport(mode), &mut s)
+                });
+                let v1 = abi::Sample {
+                    wi: s.wi,
+                    value: s.value,
+                    pdf: s.pdf,
+                    events: s.events,
+                    eta: s.eta,
+                    roughness: s.roughness,
+                };
+                (
+                    produced,
+                    v1,
+                    Some((s.sample_class, s.component, component_count)),
+                )
+            }
+        };
         if produced == 0 {
             return crate::lobes::no_sample();
         }
@@ -521,6 +737,7 @@ impl LobeType for PluginLobe {
             1.0
         };
         let delta = s.events & abi::EVENT_DELTA != 0;
+        let (class, component) = self.class_and_component(delta, reported);
         Sample {
             wi: wi.normalize(),
             value: self.clean_rgb(s.value),
@@ -528,9 +745,8 @@ impl LobeType for PluginLobe {
             valid: true,
             transmitted: s.events & abi::EVENT_TRANSMITTED != 0,
             delta,
-            // ABI V1 has no per-sample class or component: the type's class, one component.
-            class: class_of(delta, self.flags),
-            component: 0.0,
+            class,
+            component,
             eta,
             roughness: if s.roughness.is_finite() {
                 s.roughness.clamp(0.0, 1.0)

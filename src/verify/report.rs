@@ -274,7 +274,7 @@ pub struct LobeReport {
     pub reciprocal: bool,
     pub cases: Vec<CaseReport>,
     pub hard: HardReport,
-    /// Outputs the lobe type had to have zeroed during the run (`LobeType::sanitized_count`).
+    /// Outputs the lobe type had to have repaired during the run (`LobeType::sanitized_count`).
     pub sanitized: u64,
 }
 
@@ -316,7 +316,7 @@ impl Report {
             }
             if l.sanitized > 0 {
                 out.push(format!(
-                    "{}: {} outputs were NaN, infinite or negative and had to be zeroed",
+                    "{}: {} outputs broke the lobe contract and were repaired (NaN, infinite, negative or huge values, a plugin sample's class or component)",
                     l.lobe, l.sanitized
                 ));
             }
