@@ -350,9 +350,59 @@ pub fn validate(owner: &str, specs: &[ParamSpec], block: &[f32]) -> Result<(), E
     Ok(())
 }
 
+/// Per-value bounds of a flat schema (single values only): a check of whole blocks
+/// that costs a few instructions per value, where [`validate`] walks the schema.
+/// A block it refuses goes through [`validate`] for the message.
+#[derive(Clone, Debug)]
+pub struct Bounds {
+    lo: Box<[f32]>,
+    hi: Box<[f32]>,
+    /// Enumerated values, which must be whole numbers.
+    whole: Box<[bool]>,
+}
+
+impl Bounds {
+    /// The bounds of `specs`; None when it has groups, arrays or tables.
+    pub fn of(specs: &[ParamSpec]) -> Option<Bounds> {
+        let (mut lo, mut hi, mut whole) = (Vec::new(), Vec::new(), Vec::new());
+        for spec in specs {
+            if spec.shape != Shape::Value {
+                return None;
+            }
+            let (min, max, is_enum) = match spec.kind {
+                ParamKind::Enum => (0.0, spec.choices.len() as f32 - 1.0, true),
+                _ => (spec.min, spec.max, false),
+            };
+            for _ in 0..spec.kind.size() {
+                lo.push(min);
+                hi.push(max);
+                whole.push(is_enum);
+            }
+        }
+        Some(Bounds {
+            lo: lo.into(),
+            hi: hi.into(),
+            whole: whole.into(),
+        })
+    }
+
+    /// Whether [`validate`] accepts `block`: its size, and every value finite, in
+    /// range and, for enums, whole.
+    pub fn admits(&self, block: &[f32]) -> bool {
+        block.len() == self.lo.len()
+            && block
+                .iter()
+                .zip(self.lo.iter().zip(&self.hi))
+                .zip(&self.whole)
+                .all(|((&v, (&lo, &hi)), &whole)| {
+                    v.is_finite() && v >= lo && v <= hi && (!whole || is_whole(v))
+                })
+    }
+}
+
 /// A count slot holds a whole number of rows in `[0, capacity]`.
 fn check_count(owner: &str, spec: &ParamSpec, count: f32) -> Result<(), Error> {
-    if count.fract() == 0.0 && (0.0..=spec.capacity as f32).contains(&count) {
+    if (0.0..=spec.capacity as f32).contains(&count) && is_whole(count) {
         return Ok(());
     }
     Err(Error::new(
@@ -383,7 +433,7 @@ pub fn check_values(
         }
         if spec.kind == ParamKind::Enum {
             let choices = spec.choices;
-            if v.fract() != 0.0 || v < 0.0 || v as usize >= choices.len() {
+            if v < 0.0 || v as usize >= choices.len() || !is_whole(v) {
                 return Err(Error::new(
                     Status::OutOfRange,
                     format!(
@@ -407,6 +457,13 @@ pub fn check_values(
         }
     }
     Ok(())
+}
+
+/// `v` (in [0, 2^32)) has no fraction. Not `f32::fract`: without SSE4.1 (the baseline
+/// ISA) that is a libm `truncf` call, on every parameter validated.
+#[inline(always)]
+fn is_whole(v: f32) -> bool {
+    v == (v as u32) as f32
 }
 
 /// One value of a block, resolved from an address ([`ELEMENT_SHIFT`]).

@@ -17,6 +17,7 @@ use crate::lobes::lambert::Lambert;
 use crate::lobes::mirror::Mirror;
 use crate::lobes::{Builtin, LobeType};
 use crate::materials::{BUILTIN_MATERIALS, MaterialType};
+use crate::params;
 use std::ops::Deref;
 use std::sync::Arc;
 
@@ -62,6 +63,8 @@ impl From<&'static dyn LobeType> for LobeRef {
 /// The lobe types a runtime knows; ids are indices.
 pub struct Registry {
     types: Vec<LobeRef>,
+    /// Each type's [`params::Bounds`] (None for nested schemas), for `validate_block`.
+    bounds: Vec<Option<params::Bounds>>,
     materials: Vec<&'static dyn MaterialType>,
 }
 
@@ -70,6 +73,10 @@ impl Registry {
     pub fn with_builtins() -> Registry {
         Registry {
             types: BUILTINS.iter().map(|&lobe| LobeRef::Static(lobe)).collect(),
+            bounds: BUILTINS
+                .iter()
+                .map(|l| params::Bounds::of(l.params()))
+                .collect(),
             materials: BUILTIN_MATERIALS.to_vec(),
         }
     }
@@ -86,6 +93,7 @@ impl Registry {
                 ),
             ));
         }
+        self.bounds.push(params::Bounds::of(lobe.params()));
         self.types.push(lobe);
         Ok((self.types.len() - 1) as u32)
     }
@@ -128,6 +136,17 @@ impl Registry {
                 ),
             )
         })
+    }
+
+    /// Check a full parameter block of lobe type `id` (an id [`Self::get`] accepted)
+    /// as [`params::validate`] does, by its bounds first: the common, valid block costs
+    /// a few instructions per value.
+    pub fn validate_block(&self, id: u32, block: &[f32]) -> Result<(), Error> {
+        let lobe = self.get(id)?;
+        match &self.bounds[id as usize] {
+            Some(bounds) if bounds.admits(block) => Ok(()),
+            _ => params::validate(lobe.name(), lobe.params(), block),
+        }
     }
 
     /// The id of the lobe type named `name`; the error lists the valid names.

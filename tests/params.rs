@@ -498,3 +498,56 @@ fn overrides_by_element() {
         Status::OutOfRange
     );
 }
+
+/// `params::Bounds` (the quick check of lobe blocks added by C) accepts exactly the
+/// blocks `params::validate` accepts, probed one value at a time at every lobe type's
+/// edges, and no nested schema gets bounds.
+#[test]
+fn flat_schema_bounds_agree_with_validate() {
+    assert!(params::Bounds::of(SCHEMA).is_none());
+    let r = Registry::with_builtins();
+    let tiny = f32::from_bits(1);
+    for id in 0..r.len() as u32 {
+        let lobe = r.get(id).unwrap();
+        let specs = lobe.params();
+        let bounds = params::Bounds::of(specs).expect("built-in lobe schemas are flat");
+        let mut block = vec![0.0; params::block_size(specs)];
+        params::write_defaults(specs, &mut block);
+        assert!(bounds.admits(&block), "{} defaults", lobe.name());
+        assert!(!bounds.admits(&block[1..]), "{}: short block", lobe.name());
+        for at in 0..block.len() {
+            let keep = block[at];
+            let mut probes = vec![
+                f32::NAN,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                -0.0,
+                tiny,
+                0.5,
+                1.0,
+                1.5,
+                2.0,
+                16_777_216.0,
+                1e30,
+                -1.0,
+            ];
+            for spec in specs {
+                for edge in [spec.min, spec.max] {
+                    probes.extend([edge, edge.next_down(), edge.next_up()]);
+                }
+            }
+            for v in probes {
+                block[at] = v;
+                let valid = params::validate(lobe.name(), specs, &block).is_ok();
+                assert_eq!(
+                    bounds.admits(&block),
+                    valid,
+                    "{}: value {at} = {v:e}",
+                    lobe.name()
+                );
+                assert_eq!(r.validate_block(id, &block).is_ok(), valid);
+            }
+            block[at] = keep;
+        }
+    }
+}

@@ -197,9 +197,9 @@ fn aspect_coordinate<L: Lane>(anisotropic: L) -> L {
 fn sum_pairs<L: Lane, const C: usize>(values: &[f32], c: [(L, L); C]) -> (L, L) {
     let (mut a, mut b) = (L::zero(), L::zero());
     for (cell, w) in c {
-        let at = cell * L::splat(2.0);
-        a = w.mul_add(L::gather(values, at), a);
-        b = w.mul_add(L::gather(values, at + L::one()), b);
+        let [va, vb] = L::gather_row::<2>(values, cell * L::splat(2.0));
+        a = w.mul_add(va, a);
+        b = w.mul_add(vb, b);
     }
     (a, b)
 }

@@ -236,9 +236,9 @@ fn interpolate<L: Lane, const K: usize>(table: Table, corners: &[(L, L)]) -> [L;
     let stride = L::splat(K as f32);
     let mut sum = [L::zero(); K];
     for &(cell, weight) in corners {
-        let at = cell * stride;
-        for (k, s) in sum.iter_mut().enumerate() {
-            *s = weight.mul_add(L::gather(values, at + L::splat(k as f32)), *s);
+        let row = L::gather_row::<K>(values, cell * stride);
+        for (s, v) in sum.iter_mut().zip(row) {
+            *s = weight.mul_add(v, *s);
         }
     }
     sum

@@ -235,7 +235,7 @@ impl Closure {
             ));
         }
         if let Some(values) = params {
-            params::validate(lobe.name(), lobe.params(), values)?;
+            registry.validate_block(type_id, values)?;
         }
         self.push_lobe(
             lobe,

@@ -38,6 +38,9 @@ pub struct Material {
     kind: &'static dyn MaterialType,
     type_id: u32,
     params: Vec<f32>,
+    /// Each schema entry's value (element 0), resolved here so that per-point overrides
+    /// by entry index skip `params::locate`; None for group and table headers.
+    entries: Box<[Option<params::Slot<'static>>]>,
     /// Each slot's lobe type id and type.
     slots: Vec<(u32, LobeRef)>,
     prune: f32,
@@ -90,10 +93,14 @@ impl Material {
                 Ok((id, lobe))
             })
             .collect::<Result<Vec<_>, Error>>()?;
+        let entries = (0..specs.len() as u32)
+            .map(|i| params::locate(kind.name(), kind.params(), i, &"").ok())
+            .collect();
         Ok(Material {
             kind,
             type_id,
             params: block,
+            entries,
             slots,
             prune,
         })
@@ -168,7 +175,10 @@ impl Material {
         kind: ParamKind,
     ) -> Result<params::Slot<'_>, Error> {
         let what = format_args!("overrides[{i}]");
-        let slot = params::locate(self.kind.name(), self.kind.params(), param, &what)?;
+        let slot = match self.entries.get(param as usize) {
+            Some(Some(slot)) => *slot,
+            _ => params::locate(self.kind.name(), self.kind.params(), param, &what)?,
+        };
         if slot.spec.kind != kind {
             return Err(Error::new(
                 Status::InvalidArgument,

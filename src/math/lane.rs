@@ -105,6 +105,16 @@ pub trait Lane:
     fn frexp(self) -> (Self, Self);
     /// `table[index]` per lane; `index` holds integral values in `0..table.len()`.
     fn gather(table: &[f32], index: Self) -> Self;
+    /// `table[index + k]` for `k` in `0..K`: each lane's row of `K` consecutive values
+    /// (`index + K <= table.len()`). The scalar lane reads the row as one slice.
+    #[inline(always)]
+    fn gather_row<const K: usize>(table: &[f32], index: Self) -> [Self; K] {
+        let mut row = [Self::zero(); K];
+        for (k, v) in row.iter_mut().enumerate() {
+            *v = Self::gather(table, index + Self::splat(k as f32));
+        }
+        row
+    }
 
     #[inline(always)]
     fn zero() -> Self {
@@ -293,5 +303,12 @@ impl Lane for f32 {
     #[inline(always)]
     fn gather(table: &[f32], index: Self) -> Self {
         table[index as usize]
+    }
+    #[inline(always)]
+    fn gather_row<const K: usize>(table: &[f32], index: Self) -> [Self; K] {
+        let at = index as usize;
+        let mut row = [0.0; K];
+        row.copy_from_slice(&table[at..at + K]);
+        row
     }
 }
