@@ -1,5 +1,5 @@
-//! Plugin lobe declarations (glint_plugin.h's `glint_plugin_lobe_v1` and its parameter
-//! table) decoded from bytes and validated as `glint_runtime_load_plugin` does, without
+//! Plugin lobe declarations (glint_plugin.h's `glint_plugin_lobe_v1` or `_v2` and its
+//! parameter table) decoded from bytes and validated as `glint_runtime_load_plugin` does, without
 //! a shared library: any names (non-UTF-8, empty, odd characters), flags, kinds,
 //! offsets, ranges (NaN, Inf), defaults, enum choices and block sizes are refused with
 //! GLINT_ERROR_PLUGIN_PARAMS / _BLOCK_SIZE or accepted, never a crash, panic or leak.
@@ -70,6 +70,9 @@ struct Lobe {
     block_align: Option<u32>,
     /// Some(k): callback k % 3 (eval, sample, albedo) is NULL.
     missing_callback: Option<u8>,
+    /// Some(n): declared as a version-2 lobe with `component_count` n (any value; the
+    /// valid 1..=65536 is common when the fuzzer picks small numbers).
+    version2: Option<u32>,
 }
 
 unsafe extern "C" fn eval(
@@ -88,6 +91,16 @@ unsafe extern "C" fn sample(
     _: *const [f32; 3],
     _: u32,
     _: *mut abi::Sample,
+) -> i32 {
+    0
+}
+
+unsafe extern "C" fn sample_v2(
+    _: *const c_void,
+    _: *const [f32; 3],
+    _: *const [f32; 3],
+    _: u32,
+    _: *mut abi::SampleV2,
 ) -> i32 {
     0
 }
@@ -150,9 +163,34 @@ fuzz_target!(|lobe: Lobe| {
         albedo: (missing != Some(2)).then_some(albedo as abi::AlbedoFn),
         eval_batch: None,
     };
-    // SAFETY: every pointer in `decl` is NULL or points into the vectors and strings
-    // above, each array holding the count the declaration states.
-    if let Err(e) = unsafe { glint::plugin::validate_declaration(&decl) } {
+    let checked = match lobe.version2 {
+        None => {
+            // SAFETY: every pointer in `decl` is NULL or points into the vectors and
+            // strings above, each array holding the count the declaration states.
+            unsafe { glint::plugin::validate_declaration(&decl) }
+        }
+        Some(component_count) => {
+            let v2 = abi::LobeV2 {
+                struct_size: lobe.struct_size.unwrap_or(size_of::<abi::LobeV2>() as u32),
+                name: decl.name,
+                summary: decl.summary,
+                flags: decl.flags,
+                reciprocal: decl.reciprocal,
+                params: decl.params,
+                param_count: decl.param_count,
+                block_size: decl.block_size,
+                block_align: decl.block_align,
+                eval: decl.eval,
+                sample: (missing != Some(1)).then_some(sample_v2 as abi::SampleV2Fn),
+                albedo: decl.albedo,
+                eval_batch: None,
+                component_count,
+            };
+            // SAFETY: as above; `v2` points where `decl` does.
+            unsafe { glint::plugin::validate_declaration_v2(&v2) }
+        }
+    };
+    if let Err(e) = checked {
         assert!(
             matches!(
                 e.status,

@@ -244,6 +244,14 @@ pub unsafe fn validate_declaration(decl: &abi::LobeV1) -> Result<(), Error> {
     Decl::v1(decl).and_then(PluginLobe::new).map(drop)
 }
 
+/// [`validate_declaration`] for a version-2 declaration (`glint_plugin_lobe_v2`).
+///
+/// # Safety
+/// As for [`validate_declaration`].
+pub unsafe fn validate_declaration_v2(decl: &abi::LobeV2) -> Result<(), Error> {
+    Decl::v2(decl).and_then(PluginLobe::new).map(drop)
+}
+
 /// Every `*.so` file in `dir`, in file-name order.
 pub fn plugins_in(dir: &Path) -> Result<Vec<std::path::PathBuf>, Error> {
     let entries = std::fs::read_dir(dir).map_err(|e| {
