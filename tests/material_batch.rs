@@ -259,3 +259,190 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     let error = error.unwrap();
     assert!(error.starts_with("lane 20: overrides[0]"), "{error}");
 }
+
+/// Samples, evals and albedos of a material batch equal those of the closure
+/// `Material::closure` builds per lane, on every ISA, where pruning keeps some slots,
+/// drops others and falls back to the strongest pruned one (a prune threshold of 0.2
+/// does all three across random base colors and views), for consecutive lanes and
+/// for lanes an active mask scatters, and with `u_lobe` NaN or infinite (clamped into
+/// [0, 1) as the batch documents: NaN and -inf to 0, +inf below 1).
+#[test]
+fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
+    use glint::materials::{Override, ShadingContext};
+    use glint::math::Frame;
+    use glint::params::ParamKind;
+    let registry = Registry::with_builtins();
+    let description = r#"{"material": "disney", "metallic": 0.2, "clearcoat": 0.6,
+        "sheen": 0.8, "anisotropic": 0.5, "subsurface": 0.4, "clearcoat_gloss": 0.7}"#;
+    let material = glint::json::material_from_json(&registry, description, 0.2).unwrap();
+    let index = |name: &str| {
+        let specs = material.kind().params();
+        specs.iter().position(|s| s.name == name).unwrap() as u32
+    };
+    let n = 400;
+    let mut rng = Rng::new(0x5e1e);
+    let (normal, wo) = normals_and_views(&mut rng, n);
+    let tangent: Vec<Vec3<f32>> = (0..n)
+        .map(|i| {
+            if i % 2 == 0 {
+                Vec3::new(0.0, 0.0, 0.0)
+            } else {
+                sphere(&mut rng)
+            }
+        })
+        .collect();
+    let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
+    let (wo, wi, normal, tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
+    let rough: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
+    let color = [0; 3].map(|_| (0..n).map(|_| rng.f32().powi(3)).collect::<Vec<f32>>());
+    let mut u = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
+    (u[0][5], u[0][6], u[0][8]) = (f32::NAN, f32::INFINITY, f32::NEG_INFINITY);
+    let overrides = [
+        material::OverrideLanes {
+            param: index("roughness"),
+            kind: ParamKind::Float,
+            value: [&rough, &[], &[]],
+        },
+        material::OverrideLanes {
+            param: index("base_color"),
+            kind: ParamKind::Rgb,
+            value: [&color[0], &color[1], &color[2]],
+        },
+    ];
+    let closure = |i: usize| {
+        let t = Vec3::new(tangent[0][i], tangent[1][i], tangent[2][i]);
+        let t = (t.length_squared() > 0.0).then(|| t.normalize());
+        let nrm = Vec3::new(normal[0][i], normal[1][i], normal[2][i]);
+        let ctx = ShadingContext::new(
+            Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
+            Frame::new(nrm, t),
+        );
+        let per_lane = [
+            Override {
+                param: index("roughness"),
+                kind: ParamKind::Float,
+                value: [rough[i], 0.0, 0.0],
+            },
+            Override {
+                param: index("base_color"),
+                kind: ParamKind::Rgb,
+                value: [color[0][i], color[1][i], color[2][i]],
+            },
+        ];
+        (material.closure(&ctx, &per_lane).unwrap(), ctx.wo)
+    };
+    // Pruning's three outcomes all occur: several slots kept, one kept, the fallback.
+    // A closure of one lobe whose albedo's luminance is below the threshold is the
+    // fallback.
+    let outcomes: Vec<(usize, bool)> = (0..n)
+        .map(|i| {
+            let (c, wo) = closure(i);
+            (c.lobes().len(), c.albedo(wo).unwrap().luminance() < 0.2)
+        })
+        .collect();
+    assert!(outcomes.iter().any(|&(k, _)| k > 1));
+    assert!(outcomes.contains(&(1, false)) && outcomes.contains(&(1, true)));
+    let near = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * b.abs().max(1e-3);
+    let active: Vec<u8> = (0..n).map(|i| u8::from(i % 3 != 1)).collect();
+    for kernels in Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Caller,
+        };
+        for mask in [None, Some(&active[..])] {
+            let input = MaterialInput {
+                count: n,
+                material: &material,
+                active: mask,
+                wo: soa(&wo),
+                normal: soa(&normal),
+                tangent: Some(soa(&tangent)),
+                overrides: &overrides,
+            };
+            let is_active = |i: usize| mask.is_none_or(|m| m[i] != 0);
+            let mut s_wi = [vec![-1.0; n], vec![-1.0; n], vec![-1.0; n]];
+            let (mut weight, mut value, mut albedo) = (s_wi.clone(), s_wi.clone(), s_wi.clone());
+            let (mut pdf, mut eta) = (vec![-1.0; n], vec![-1.0; n]);
+            let (mut flags, mut component) = (vec![99u32; n], vec![99u32; n]);
+            let randoms = SampleRandoms {
+                u_lobe: &u[0],
+                u0: &u[1],
+                u1: &u[2],
+            };
+            let out = SampleOutput {
+                wi: soa_mut(&mut s_wi),
+                pdf: &mut pdf,
+                weight: soa_mut(&mut weight),
+                value: Some(soa_mut(&mut value)),
+                flags: Some(&mut flags),
+                lobe: None,
+                component: Some(&mut component),
+                eta: Some(&mut eta),
+                roughness: None,
+            };
+            material::sample(&exec, &input, randoms, out).unwrap();
+            material::albedo(&exec, &input, soa_mut(&mut albedo)).unwrap();
+            let mut e_value = [vec![-1.0; n], vec![-1.0; n], vec![-1.0; n]];
+            let mut e_pdf = vec![-1.0; n];
+            let out = EvalOutput {
+                value: soa_mut(&mut e_value),
+                pdf: &mut e_pdf,
+                pdf_reverse: None,
+            };
+            material::eval(&exec, &input, soa(&wi), out).unwrap();
+            let isa = kernels.isa().name();
+            for i in (0..n).filter(|&i| is_active(i)) {
+                let (c, wo) = closure(i);
+                // NaN, -inf and negatives to 0 (`clamp` would keep NaN).
+                let clamped = if u[0][i] >= 0.0 {
+                    u[0][i].min(1.0 - f32::EPSILON / 2.0)
+                } else {
+                    0.0
+                };
+                let want = c.sample(wo, [clamped, u[1][i], u[2][i]]);
+                let got_ok = pdf[i] > 0.0;
+                let what = format!("{isa}, mask {}, lane {i}", mask.is_some());
+                match want {
+                    Ok(s) => {
+                        assert!(got_ok, "{what}: closure sampled, batch failed");
+                        assert_eq!((flags[i], component[i]), (s.flags, s.component), "{what}");
+                        let got = [s_wi[0][i], s_wi[1][i], s_wi[2][i]];
+                        for (a, b) in got.iter().zip([s.wi.x, s.wi.y, s.wi.z]) {
+                            assert!((a - b).abs() <= 1e-4, "{what}: wi {got:?} vs {:?}", s.wi);
+                        }
+                        let got = [weight[0][i], weight[1][i], weight[2][i], eta[i], pdf[i]];
+                        let want = [s.weight.r, s.weight.g, s.weight.b, s.eta, s.pdf];
+                        for (k, (&a, b)) in got.iter().zip(want).enumerate() {
+                            // The batch's pdf is at `wi` normalized once more (see
+                            // `samples_carry_the_eval_at_their_direction`): 2e-4 at
+                            // alpha 0.001; weights are ratios, and do not move.
+                            let tol = if k == 4 { 1e-3 } else { 1e-4 };
+                            assert!(near(a, b, tol), "{what}: {got:?} vs {want:?}");
+                        }
+                        assert!(value.iter().all(|v| v[i].is_finite()), "{what}");
+                    }
+                    Err(_) => assert!(!got_ok && weight.iter().all(|w| w[i] == 0.0), "{what}"),
+                }
+                let a = c.albedo(wo).unwrap();
+                let e = c
+                    .eval_forward(wo, Vec3::new(wi[0][i], wi[1][i], wi[2][i]).normalize())
+                    .unwrap();
+                let got = [albedo[0][i], albedo[1][i], albedo[2][i]];
+                let got =
+                    got.into_iter()
+                        .chain([e_value[0][i], e_value[1][i], e_value[2][i], e_pdf[i]]);
+                let want = [a.r, a.g, a.b, e.value.r, e.value.g, e.value.b, e.pdf];
+                for (a, b) in got.zip(want) {
+                    assert!(near(a, b, 2e-5), "{what}: albedo and eval {a} vs {b}");
+                }
+            }
+            // Inactive lanes are left alone.
+            for i in (0..n).filter(|&i| !is_active(i)) {
+                assert_eq!(
+                    (pdf[i], e_pdf[i], albedo[0][i], flags[i]),
+                    (-1.0, -1.0, -1.0, 99)
+                );
+            }
+        }
+    }
+}
