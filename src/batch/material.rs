@@ -437,6 +437,11 @@ fn for_chunks(
     let mut lane = range.start;
     while lane < range.end && result.is_ok() {
         lanes.clear();
+        if input.active.is_none() {
+            let end = range.end.min(lane + CHUNK);
+            lanes.extend(lane as u32..end as u32);
+            lane = end;
+        }
         while lane < range.end && lanes.len() < CHUNK {
             if input.is_active(lane) {
                 lanes.push(lane as u32);
@@ -469,16 +474,14 @@ fn eval_chunk(
         pdf_reverse,
         ..
     } = s;
-    for row in rows3(value, len) {
-        row.fill(0.0);
-    }
-    grow(pdf, len).fill(0.0);
-    grow(pdf_reverse, len).fill(0.0);
+    let ([vr, vg, vb], pdf, pdf_reverse) =
+        (rows3(value, len), grow(pdf, len), grow(pdf_reverse, len));
+    // The first live slot stores, the others add; without one, zeros.
+    let mut first = true;
     for (k, (_, lobe)) in material.slots().iter().enumerate() {
         if !rows.live[k] {
             continue;
         }
-        let [vr, vg, vb] = &mut *value;
         let mut job = EvalJob {
             len,
             mode: Transport::Radiance,
@@ -486,7 +489,7 @@ fn eval_chunk(
             wo: view3(wo, len),
             wi: view3(wi, len),
             lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-            store: false,
+            store: first,
             value: want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
             pdf: &mut pdf[..len],
             except: None,
@@ -503,13 +506,31 @@ fn eval_chunk(
             };
             lobe.eval_lanes(kernels, &mut job);
         }
+        first = false;
+    }
+    if first {
+        for row in [vr, vg, vb, pdf, pdf_reverse] {
+            row.fill(0.0);
+        }
     }
 }
 
 /// `out[lane] = staged[j]`, 0 for failed lanes.
 fn scatter(lanes: &[u32], base: usize, failed: &[u8], staged: &[f32], out: &mut [f32]) {
-    for (j, &lane) in lanes.iter().enumerate() {
-        out[lane as usize - base] = if failed[j] != 0 { 0.0 } else { staged[j] };
+    let (n, first) = (lanes.len(), lanes[0] as usize - base);
+    if lanes[n - 1] as usize - base - first + 1 != n {
+        for (j, &lane) in lanes.iter().enumerate() {
+            out[lane as usize - base] = if failed[j] != 0 { 0.0 } else { staged[j] };
+        }
+        return;
+    }
+    // Consecutive lanes: one copy, then the failed ones zeroed.
+    let out = &mut out[first..first + n];
+    out.copy_from_slice(&staged[..n]);
+    if failed[..n].contains(&1) {
+        for (o, _) in out.iter_mut().zip(&failed[..n]).filter(|&(_, &f)| f != 0) {
+            *o = 0.0;
+        }
     }
 }
 
