@@ -221,9 +221,13 @@ fn stage_chunk(
 /// share the block (a parameter no lane overrides, as the clearcoat's gloss usually
 /// is: its decode takes logarithms in f64). Padding lanes get the same valid block.
 fn decode_slot(lobe: &dyn LobeType, raw: &[f32], decoded: &mut [f32], len: usize, n: usize) {
-    let shared = raw
-        .chunks_exact(len)
-        .all(|row| row[..n].iter().all(|v| v.to_bits() == row[0].to_bits()));
+    // Sixteen lanes at a time, without a branch per lane.
+    let shared = raw.chunks_exact(len).all(|row| {
+        let first = row[0].to_bits();
+        row[..n]
+            .chunks(16)
+            .all(|c| c.iter().fold(true, |same, v| same & (v.to_bits() == first)))
+    });
     if !shared {
         lobe.decode_rows(raw, decoded, len);
         return;
@@ -316,10 +320,16 @@ fn stage_blocks(
     let material = input.material;
     let (specs, defaults) = (material.kind().params(), material.params());
     let blocks = grow(&mut rows.input, defaults.len() * len);
-    for (row, &v) in blocks.chunks_exact_mut(len).zip(defaults) {
-        row.fill(v);
-    }
     let n = lanes.len();
+    // The material's values; rows an override gathers over get them in padding only.
+    let mut overridden = [false; MAX_MATERIAL_PARAMS];
+    for o in input.overrides {
+        let at = params::offset_of(specs, o.param as usize);
+        overridden[at..at + o.kind.size()].fill(true);
+    }
+    for ((row, &v), &o) in blocks.chunks_exact_mut(len).zip(defaults).zip(&overridden) {
+        row[if o { n } else { 0 }..].fill(v);
+    }
     let mut any = false;
     for (i, o) in input.overrides.iter().enumerate() {
         let spec = &specs[o.param as usize];
