@@ -83,13 +83,31 @@ fn rgb_at<L: Lane>(rows: &[f32], k: usize, len: usize, i: usize) -> Rgb<L> {
     )
 }
 
+/// [`select_slots`] with the slot count a constant, so its loops unroll and its
+/// per-slot values stay in registers.
 #[inline(always)]
 fn select_body<L: Lane>(job: &mut SelectJob<'_>) {
-    let (len, count) = (job.len, job.count);
+    match job.count {
+        0 => {}
+        1 => select_slots::<L, 1>(job),
+        2 => select_slots::<L, 2>(job),
+        3 => select_slots::<L, 3>(job),
+        4 => select_slots::<L, 4>(job),
+        5 => select_slots::<L, 5>(job),
+        6 => select_slots::<L, 6>(job),
+        7 => select_slots::<L, 7>(job),
+        _ => select_slots::<L, MAX_SLOTS>(job),
+    }
+}
+
+#[inline(always)]
+fn select_slots<L: Lane, const COUNT: usize>(job: &mut SelectJob<'_>) {
+    debug_assert_eq!(job.count, COUNT);
+    let len = job.len;
     let (zero, one) = (L::zero(), L::one());
-    let mut share = [zero; MAX_SLOTS];
-    let mut keep = [zero; MAX_SLOTS];
-    let mut weight = [Rgb::zero(); MAX_SLOTS];
+    let mut share = [zero; COUNT];
+    let mut keep = [zero; COUNT];
+    let mut weight = [Rgb::zero(); COUNT];
     for i in (0..len).step_by(L::LANES) {
         // `Material::emit`: an emitted slot (some weight channel > 0) is kept unless its
         // share is below `prune`; the first strongest pruned slot is kept when every
@@ -97,7 +115,7 @@ fn select_body<L: Lane>(job: &mut SelectJob<'_>) {
         let mut kept = zero;
         let mut strongest = L::splat(-1.0);
         let mut strongest_share = L::splat(f32::NEG_INFINITY);
-        for k in 0..count {
+        for k in 0..COUNT {
             let w = rgb_at::<L>(job.weight, k, len, i);
             weight[k] = w;
             share[k] = if job.live[k] {
@@ -117,7 +135,7 @@ fn select_body<L: Lane>(job: &mut SelectJob<'_>) {
         // `closure::selection` of the kept slots: 1 for a single one, else their
         // shares, or their weights' luminances, or ones, whichever first sums above 0.
         let (mut n, mut share_sum, mut weight_sum) = (zero, zero, zero);
-        for k in 0..count {
+        for k in 0..COUNT {
             let fallback = none & strongest.eq(L::splat(k as f32));
             keep[k] = L::select(fallback, one, keep[k]);
             n += keep[k];
@@ -125,7 +143,7 @@ fn select_body<L: Lane>(job: &mut SelectJob<'_>) {
             weight_sum += keep[k] * weight[k].luminance().max(zero);
         }
         let mut largest = zero;
-        for k in 0..count {
+        for k in 0..COUNT {
             let by = L::select(
                 share_sum.gt(zero),
                 share[k].max(zero),
@@ -138,12 +156,12 @@ fn select_body<L: Lane>(job: &mut SelectJob<'_>) {
         // lane without any emitted slot keeps zeros.
         let largest = L::select(largest.gt(zero), largest, one);
         let mut total = zero;
-        for p in &mut keep[..count] {
+        for p in &mut keep {
             *p = *p / largest;
             total += *p;
         }
         let total = L::select(total.gt(zero), total, one);
-        for k in 0..count {
+        for k in 0..COUNT {
             let p = keep[k] / total;
             let on = p.gt(zero);
             job.kept[k] |= on.any();
