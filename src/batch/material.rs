@@ -16,14 +16,14 @@ use super::stage::{
 };
 use super::{
     EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, SplitLanes, check_count,
-    check_len, finish_lane, rows_mut, run_blocks,
+    check_len, finish_lane, run_blocks,
 };
 use crate::closure::SampleResult;
 use crate::error::{Error, Status};
 use crate::kernels::expand::ExpandJob;
 use crate::kernels::material_rows::{self, ChooseJob, SelectJob};
 use crate::kernels::{
-    AlbedoJob, Directions, EvalJob, FinishJob, FinishOutput, LobeLanes, SampleJob, finish_mixture,
+    AlbedoJob, Directions, EvalJob, FinishJob, LobeLanes, SampleJob, finish_mixture,
 };
 use crate::lobes::LobeType;
 use crate::lobes::Transport;
@@ -890,17 +890,7 @@ fn finish_in_place(
         roughness: &s.roughness[..n],
         value: view3(&s.value, n),
         pdf: &s.pdf[..n],
-        out: FinishOutput {
-            wi: rows_mut(&mut out.wi, &local),
-            pdf: &mut out.pdf[local.clone()],
-            weight: rows_mut(&mut out.weight, &local),
-            value: out.value.as_mut().map(|v| rows_mut(v, &local)),
-            flags: out.flags.as_deref_mut().map(|f| &mut f[local.clone()]),
-            lobe: out.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
-            component: out.component.as_deref_mut().map(|k| &mut k[local.clone()]),
-            eta: out.eta.as_deref_mut().map(|e| &mut e[local.clone()]),
-            roughness: out.roughness.as_deref_mut().map(|r| &mut r[local.clone()]),
-        },
+        out: out.finish_rows(&local),
     };
     finish_mixture(kernels, &mut job);
 }
