@@ -260,27 +260,33 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     assert!(error.starts_with("lane 20: overrides[0]"), "{error}");
 }
 
-/// Samples, evals and albedos of a material batch equal those of the closure
-/// `Material::closure` builds per lane, on every ISA, where pruning keeps some slots,
-/// drops others and falls back to the strongest pruned one (a prune threshold of 0.2
-/// does all three across random base colors and views), for consecutive lanes and
-/// for lanes an active mask scatters, and with `u_lobe` NaN or infinite (clamped into
-/// [0, 1) as the batch documents: NaN and -inf to 0, +inf below 1).
-#[test]
-fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
+/// Per-lane parameters of a batch: name and one row per component.
+type LaneParams = Vec<(&'static str, Vec<Vec<f32>>)>;
+
+/// Samples, evals and albedos of a batch over `description` (pruned at `prune`) equal
+/// those of the closure `Material::closure` builds per lane, on every ISA, for
+/// consecutive lanes and for lanes an active mask scatters, random views, normals,
+/// tangents (every other one automatic) and the per-lane `params`; `u_lobe` NaN or
+/// infinite on lanes 5, 6 and 8 (when there are) clamps into [0, 1) as the batch
+/// documents: NaN and -inf to 0, +inf below 1. Returns each lane's closure's lobe
+/// count and whether its albedo's luminance is below `prune`.
+fn matches_closures(
+    description: &str,
+    prune: f32,
+    n: usize,
+    seed: u64,
+    params: impl Fn(&mut Rng) -> LaneParams,
+) -> Vec<(usize, bool)> {
     use glint::materials::{Override, ShadingContext};
     use glint::math::Frame;
     use glint::params::ParamKind;
     let registry = Registry::with_builtins();
-    let description = r#"{"material": "disney", "metallic": 0.2, "clearcoat": 0.6,
-        "sheen": 0.8, "anisotropic": 0.5, "subsurface": 0.4, "clearcoat_gloss": 0.7}"#;
-    let material = glint::json::material_from_json(&registry, description, 0.2).unwrap();
+    let material = glint::json::material_from_json(&registry, description, prune).unwrap();
     let index = |name: &str| {
         let specs = material.kind().params();
         specs.iter().position(|s| s.name == name).unwrap() as u32
     };
-    let n = 400;
-    let mut rng = Rng::new(0x5e1e);
+    let mut rng = Rng::new(seed);
     let (normal, wo) = normals_and_views(&mut rng, n);
     let tangent: Vec<Vec3<f32>> = (0..n)
         .map(|i| {
@@ -293,22 +299,28 @@ fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
         .collect();
     let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
     let (wo, wi, normal, tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
-    let rough: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
-    let color = [0; 3].map(|_| (0..n).map(|_| rng.f32().powi(3)).collect::<Vec<f32>>());
+    let params = params(&mut rng);
     let mut u = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
-    (u[0][5], u[0][6], u[0][8]) = (f32::NAN, f32::INFINITY, f32::NEG_INFINITY);
-    let overrides = [
-        material::OverrideLanes {
-            param: index("roughness"),
-            kind: ParamKind::Float,
-            value: [&rough, &[], &[]],
-        },
-        material::OverrideLanes {
-            param: index("base_color"),
-            kind: ParamKind::Rgb,
-            value: [&color[0], &color[1], &color[2]],
-        },
-    ];
+    for (lane, x) in [(5, f32::NAN), (6, f32::INFINITY), (8, f32::NEG_INFINITY)] {
+        if lane < n {
+            u[0][lane] = x;
+        }
+    }
+    let kind = |rows: &[Vec<f32>]| {
+        if rows.len() == 3 {
+            ParamKind::Rgb
+        } else {
+            ParamKind::Float
+        }
+    };
+    let overrides: Vec<material::OverrideLanes<'_>> = params
+        .iter()
+        .map(|(name, rows)| material::OverrideLanes {
+            param: index(name),
+            kind: kind(rows),
+            value: [0, 1, 2].map(|c| rows.get(c).map_or(&[][..], |r| &r[..])),
+        })
+        .collect();
     let closure = |i: usize| {
         let t = Vec3::new(tangent[0][i], tangent[1][i], tangent[2][i]);
         let t = (t.length_squared() > 0.0).then(|| t.normalize());
@@ -317,31 +329,16 @@ fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
             Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
             Frame::new(nrm, t),
         );
-        let per_lane = [
-            Override {
-                param: index("roughness"),
-                kind: ParamKind::Float,
-                value: [rough[i], 0.0, 0.0],
-            },
-            Override {
-                param: index("base_color"),
-                kind: ParamKind::Rgb,
-                value: [color[0][i], color[1][i], color[2][i]],
-            },
-        ];
+        let per_lane: Vec<Override> = params
+            .iter()
+            .map(|(name, rows)| Override {
+                param: index(name),
+                kind: kind(rows),
+                value: [0, 1, 2].map(|c| rows.get(c).map_or(0.0, |r| r[i])),
+            })
+            .collect();
         (material.closure(&ctx, &per_lane).unwrap(), ctx.wo)
     };
-    // Pruning's three outcomes all occur: several slots kept, one kept, the fallback.
-    // A closure of one lobe whose albedo's luminance is below the threshold is the
-    // fallback.
-    let outcomes: Vec<(usize, bool)> = (0..n)
-        .map(|i| {
-            let (c, wo) = closure(i);
-            (c.lobes().len(), c.albedo(wo).unwrap().luminance() < 0.2)
-        })
-        .collect();
-    assert!(outcomes.iter().any(|&(k, _)| k > 1));
-    assert!(outcomes.contains(&(1, false)) && outcomes.contains(&(1, true)));
     let near = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * b.abs().max(1e-3);
     let active: Vec<u8> = (0..n).map(|i| u8::from(i % 3 != 1)).collect();
     for kernels in Kernels::available() {
@@ -445,4 +442,53 @@ fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
             }
         }
     }
+    (0..n)
+        .map(|i| {
+            let (c, wo) = closure(i);
+            (c.lobes().len(), c.albedo(wo).unwrap().luminance() < prune)
+        })
+        .collect()
+}
+
+/// Pruning keeps several slots on some lanes, one on others, and on others falls back
+/// to the strongest pruned slot (a closure of one lobe whose albedo's luminance is
+/// below the threshold): a threshold of 0.2 over random base colors and views.
+#[test]
+fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
+    let description = r#"{"material": "disney", "metallic": 0.2, "clearcoat": 0.6,
+        "sheen": 0.8, "anisotropic": 0.5, "subsurface": 0.4, "clearcoat_gloss": 0.7}"#;
+    let outcomes = matches_closures(description, 0.2, 400, 0x5e1e, |rng| {
+        vec![
+            ("roughness", vec![(0..400).map(|_| rng.f32()).collect()]),
+            (
+                "base_color",
+                (0..3)
+                    .map(|_| (0..400).map(|_| rng.f32().powi(3)).collect())
+                    .collect(),
+            ),
+        ]
+    });
+    assert!(outcomes.iter().any(|&(k, _)| k > 1));
+    assert!(outcomes.contains(&(1, false)) && outcomes.contains(&(1, true)));
+}
+
+/// Slots emitted on some lanes only (diffuse off where metallic is 1, clearcoat off
+/// where it is 0), one emitted on none (sheen 0), over one register and a tail.
+#[test]
+fn slots_emitted_on_some_lanes_match_their_closures() {
+    let description = r#"{"material": "disney", "sheen": 0, "roughness": 0.4}"#;
+    let outcomes = matches_closures(description, 0.0, 17, 0xe1, |_| {
+        vec![
+            ("metallic", vec![(0..17).map(|i| (i % 2) as f32).collect()]),
+            (
+                "clearcoat",
+                vec![(0..17).map(|i| (i % 3 / 2) as f32).collect()],
+            ),
+        ]
+    });
+    let counts: Vec<usize> = outcomes.iter().map(|&(k, _)| k).collect();
+    assert!(
+        counts.contains(&1) && counts.contains(&2) && counts.contains(&3),
+        "{counts:?}"
+    );
 }
