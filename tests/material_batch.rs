@@ -259,3 +259,236 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     let error = error.unwrap();
     assert!(error.starts_with("lane 20: overrides[0]"), "{error}");
 }
+
+/// Per-lane parameters of a batch: name and one row per component.
+type LaneParams = Vec<(&'static str, Vec<Vec<f32>>)>;
+
+/// Samples, evals and albedos of a batch over `description` (pruned at `prune`) equal
+/// those of the closure `Material::closure` builds per lane, on every ISA, for
+/// consecutive lanes and for lanes an active mask scatters, random views, normals,
+/// tangents (every other one automatic) and the per-lane `params`; `u_lobe` NaN or
+/// infinite on lanes 5, 6 and 8 (when there are) clamps into [0, 1) as the batch
+/// documents: NaN and -inf to 0, +inf below 1. Returns each lane's closure's lobe
+/// count and whether its albedo's luminance is below `prune`.
+fn matches_closures(
+    description: &str,
+    prune: f32,
+    n: usize,
+    seed: u64,
+    params: impl Fn(&mut Rng) -> LaneParams,
+) -> Vec<(usize, bool)> {
+    use glint::materials::{Override, ShadingContext};
+    use glint::math::Frame;
+    use glint::params::ParamKind;
+    let registry = Registry::with_builtins();
+    let material = glint::json::material_from_json(&registry, description, prune).unwrap();
+    let index = |name: &str| {
+        let specs = material.kind().params();
+        specs.iter().position(|s| s.name == name).unwrap() as u32
+    };
+    let mut rng = Rng::new(seed);
+    let (normal, wo) = normals_and_views(&mut rng, n);
+    let tangent: Vec<Vec3<f32>> = (0..n)
+        .map(|i| {
+            if i % 2 == 0 {
+                Vec3::new(0.0, 0.0, 0.0)
+            } else {
+                sphere(&mut rng)
+            }
+        })
+        .collect();
+    let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
+    let (wo, wi, normal, tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
+    let params = params(&mut rng);
+    let mut u = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
+    for (lane, x) in [(5, f32::NAN), (6, f32::INFINITY), (8, f32::NEG_INFINITY)] {
+        if lane < n {
+            u[0][lane] = x;
+        }
+    }
+    let kind = |rows: &[Vec<f32>]| {
+        if rows.len() == 3 {
+            ParamKind::Rgb
+        } else {
+            ParamKind::Float
+        }
+    };
+    let overrides: Vec<material::OverrideLanes<'_>> = params
+        .iter()
+        .map(|(name, rows)| material::OverrideLanes {
+            param: index(name),
+            kind: kind(rows),
+            value: [0, 1, 2].map(|c| rows.get(c).map_or(&[][..], |r| &r[..])),
+        })
+        .collect();
+    let closure = |i: usize| {
+        let t = Vec3::new(tangent[0][i], tangent[1][i], tangent[2][i]);
+        let t = (t.length_squared() > 0.0).then(|| t.normalize());
+        let nrm = Vec3::new(normal[0][i], normal[1][i], normal[2][i]);
+        let ctx = ShadingContext::new(
+            Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
+            Frame::new(nrm, t),
+        );
+        let per_lane: Vec<Override> = params
+            .iter()
+            .map(|(name, rows)| Override {
+                param: index(name),
+                kind: kind(rows),
+                value: [0, 1, 2].map(|c| rows.get(c).map_or(0.0, |r| r[i])),
+            })
+            .collect();
+        (material.closure(&ctx, &per_lane).unwrap(), ctx.wo)
+    };
+    let near = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * b.abs().max(1e-3);
+    let active: Vec<u8> = (0..n).map(|i| u8::from(i % 3 != 1)).collect();
+    for kernels in Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Caller,
+        };
+        for mask in [None, Some(&active[..])] {
+            let input = MaterialInput {
+                count: n,
+                material: &material,
+                active: mask,
+                wo: soa(&wo),
+                normal: soa(&normal),
+                tangent: Some(soa(&tangent)),
+                overrides: &overrides,
+            };
+            let is_active = |i: usize| mask.is_none_or(|m| m[i] != 0);
+            let mut s_wi = [vec![-1.0; n], vec![-1.0; n], vec![-1.0; n]];
+            let (mut weight, mut value, mut albedo) = (s_wi.clone(), s_wi.clone(), s_wi.clone());
+            let (mut pdf, mut eta) = (vec![-1.0; n], vec![-1.0; n]);
+            let (mut flags, mut component) = (vec![99u32; n], vec![99u32; n]);
+            let randoms = SampleRandoms {
+                u_lobe: &u[0],
+                u0: &u[1],
+                u1: &u[2],
+            };
+            let out = SampleOutput {
+                wi: soa_mut(&mut s_wi),
+                pdf: &mut pdf,
+                weight: soa_mut(&mut weight),
+                value: Some(soa_mut(&mut value)),
+                flags: Some(&mut flags),
+                lobe: None,
+                component: Some(&mut component),
+                eta: Some(&mut eta),
+                roughness: None,
+            };
+            material::sample(&exec, &input, randoms, out).unwrap();
+            material::albedo(&exec, &input, soa_mut(&mut albedo)).unwrap();
+            let mut e_value = [vec![-1.0; n], vec![-1.0; n], vec![-1.0; n]];
+            let mut e_pdf = vec![-1.0; n];
+            let out = EvalOutput {
+                value: soa_mut(&mut e_value),
+                pdf: &mut e_pdf,
+                pdf_reverse: None,
+            };
+            material::eval(&exec, &input, soa(&wi), out).unwrap();
+            let isa = kernels.isa().name();
+            for i in (0..n).filter(|&i| is_active(i)) {
+                let (c, wo) = closure(i);
+                // NaN, -inf and negatives to 0 (`clamp` would keep NaN).
+                let clamped = if u[0][i] >= 0.0 {
+                    u[0][i].min(1.0 - f32::EPSILON / 2.0)
+                } else {
+                    0.0
+                };
+                let want = c.sample(wo, [clamped, u[1][i], u[2][i]]);
+                let got_ok = pdf[i] > 0.0;
+                let what = format!("{isa}, mask {}, lane {i}", mask.is_some());
+                match want {
+                    Ok(s) => {
+                        assert!(got_ok, "{what}: closure sampled, batch failed");
+                        assert_eq!((flags[i], component[i]), (s.flags, s.component), "{what}");
+                        let got = [s_wi[0][i], s_wi[1][i], s_wi[2][i]];
+                        for (a, b) in got.iter().zip([s.wi.x, s.wi.y, s.wi.z]) {
+                            assert!((a - b).abs() <= 1e-4, "{what}: wi {got:?} vs {:?}", s.wi);
+                        }
+                        let got = [weight[0][i], weight[1][i], weight[2][i], eta[i], pdf[i]];
+                        let want = [s.weight.r, s.weight.g, s.weight.b, s.eta, s.pdf];
+                        for (k, (&a, b)) in got.iter().zip(want).enumerate() {
+                            // The batch's pdf is at `wi` normalized once more (see
+                            // `samples_carry_the_eval_at_their_direction`): 2e-4 at
+                            // alpha 0.001; weights are ratios, and do not move.
+                            let tol = if k == 4 { 1e-3 } else { 1e-4 };
+                            assert!(near(a, b, tol), "{what}: {got:?} vs {want:?}");
+                        }
+                        assert!(value.iter().all(|v| v[i].is_finite()), "{what}");
+                    }
+                    Err(_) => assert!(!got_ok && weight.iter().all(|w| w[i] == 0.0), "{what}"),
+                }
+                let a = c.albedo(wo).unwrap();
+                let e = c
+                    .eval_forward(wo, Vec3::new(wi[0][i], wi[1][i], wi[2][i]).normalize())
+                    .unwrap();
+                let got = [albedo[0][i], albedo[1][i], albedo[2][i]];
+                let got =
+                    got.into_iter()
+                        .chain([e_value[0][i], e_value[1][i], e_value[2][i], e_pdf[i]]);
+                let want = [a.r, a.g, a.b, e.value.r, e.value.g, e.value.b, e.pdf];
+                for (a, b) in got.zip(want) {
+                    assert!(near(a, b, 2e-5), "{what}: albedo and eval {a} vs {b}");
+                }
+            }
+            // Inactive lanes are left alone.
+            for i in (0..n).filter(|&i| !is_active(i)) {
+                assert_eq!(
+                    (pdf[i], e_pdf[i], albedo[0][i], flags[i]),
+                    (-1.0, -1.0, -1.0, 99)
+                );
+            }
+        }
+    }
+    (0..n)
+        .map(|i| {
+            let (c, wo) = closure(i);
+            (c.lobes().len(), c.albedo(wo).unwrap().luminance() < prune)
+        })
+        .collect()
+}
+
+/// Pruning keeps several slots on some lanes, one on others, and on others falls back
+/// to the strongest pruned slot (a closure of one lobe whose albedo's luminance is
+/// below the threshold): a threshold of 0.2 over random base colors and views.
+#[test]
+fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
+    let description = r#"{"material": "disney", "metallic": 0.2, "clearcoat": 0.6,
+        "sheen": 0.8, "anisotropic": 0.5, "subsurface": 0.4, "clearcoat_gloss": 0.7}"#;
+    let outcomes = matches_closures(description, 0.2, 400, 0x5e1e, |rng| {
+        vec![
+            ("roughness", vec![(0..400).map(|_| rng.f32()).collect()]),
+            (
+                "base_color",
+                (0..3)
+                    .map(|_| (0..400).map(|_| rng.f32().powi(3)).collect())
+                    .collect(),
+            ),
+        ]
+    });
+    assert!(outcomes.iter().any(|&(k, _)| k > 1));
+    assert!(outcomes.contains(&(1, false)) && outcomes.contains(&(1, true)));
+}
+
+/// Slots emitted on some lanes only (diffuse off where metallic is 1, clearcoat off
+/// where it is 0), one emitted on none (sheen 0), over one register and a tail.
+#[test]
+fn slots_emitted_on_some_lanes_match_their_closures() {
+    let description = r#"{"material": "disney", "sheen": 0, "roughness": 0.4}"#;
+    let outcomes = matches_closures(description, 0.0, 17, 0xe1, |_| {
+        vec![
+            ("metallic", vec![(0..17).map(|i| (i % 2) as f32).collect()]),
+            (
+                "clearcoat",
+                vec![(0..17).map(|i| (i % 3 / 2) as f32).collect()],
+            ),
+        ]
+    });
+    let counts: Vec<usize> = outcomes.iter().map(|&(k, _)| k).collect();
+    assert!(
+        counts.contains(&1) && counts.contains(&2) && counts.contains(&3),
+        "{counts:?}"
+    );
+}

@@ -21,12 +21,15 @@ use super::{
 use crate::closure::SampleResult;
 use crate::error::{Error, Status};
 use crate::kernels::expand::ExpandJob;
-use crate::kernels::{AlbedoJob, Directions, EvalJob, LobeLanes, SampleJob, mixture};
+use crate::kernels::material_rows::{self, ChooseJob, SelectJob};
+use crate::kernels::{
+    AlbedoJob, Directions, EvalJob, FinishJob, LobeLanes, SampleJob, finish_mixture,
+};
+use crate::lobes::LobeType;
 use crate::lobes::Transport;
 use crate::materials::compiled::MAX_MATERIAL_PARAMS;
 use crate::materials::{MAX_SLOT_PARAMS, MAX_SLOTS, Material};
-use crate::math::frame::duff_axes;
-use crate::math::{Frame, Rgb, Vec3};
+use crate::math::{Frame, Vec3};
 use crate::params::{self, ParamKind};
 use crate::simd::Kernels;
 use std::ops::Range;
@@ -114,8 +117,8 @@ pub(super) struct SlotRows {
     weight: Vec<f32>,
     probability: Vec<f32>,
     frame: Vec<f32>,
-    /// Each slot's `luminance(weight * albedo(wo))`: slot `k`'s of lane `j` at `k * len + j`.
-    shares: Vec<f32>,
+    /// Each slot's `weight * albedo(wo)`, laid out as `weight`.
+    albedo: Vec<f32>,
     /// Whether any lane emits the slot.
     live: [bool; MAX_SLOTS],
 }
@@ -133,7 +136,7 @@ impl SlotRows {
         super::stage::reserve(&mut self.params, MAX_SLOTS * MAX_PARAMS * len)?;
         super::stage::reserve(&mut self.weight, MAX_SLOTS * 3 * len)?;
         super::stage::reserve(&mut self.probability, MAX_SLOTS * len)?;
-        super::stage::reserve(&mut self.shares, MAX_SLOTS * len)?;
+        super::stage::reserve(&mut self.albedo, MAX_SLOTS * 3 * len)?;
         super::stage::reserve(&mut self.frame, 9 * len)
     }
 
@@ -186,7 +189,7 @@ fn stage_chunk(
         failed,
         errors,
     );
-    any |= stage_frames(input, lanes, len, &s.wo, rows, failed, errors);
+    any |= stage_frames(kernels, input, lanes, len, &s.wo, rows, failed, errors);
     any |= stage_blocks(input, lanes, len, rows, failed, errors);
     s.any_failed = any;
     let mut block_lens = [0; MAX_SLOTS];
@@ -209,15 +212,44 @@ fn stage_chunk(
     for (k, (_, lobe)) in slots.iter().enumerate() {
         let raw = &rows.raw[k * MAX_SLOT_PARAMS * len..][..block_lens[k] * len];
         let decoded = &mut params[k * MAX_PARAMS * len..][..lobe.decoded_len() * len];
-        lobe.decode_rows(raw, decoded, len);
+        decode_slot(&**lobe, raw, decoded, len, lanes.len());
     }
     prune(kernels, input.material, len, s)
+}
+
+/// `lobe.decode_rows`, or one `decode` filled over the rows when the chunk's `n` lanes
+/// share the block (a parameter no lane overrides, as the clearcoat's gloss usually
+/// is: its decode takes logarithms in f64). Padding lanes get the same valid block.
+fn decode_slot(lobe: &dyn LobeType, raw: &[f32], decoded: &mut [f32], len: usize, n: usize) {
+    // Sixteen lanes at a time, without a branch per lane.
+    let shared = raw.chunks_exact(len).all(|row| {
+        let first = row[0].to_bits();
+        row[..n]
+            .chunks(16)
+            .all(|c| c.iter().fold(true, |same, v| same & (v.to_bits() == first)))
+    });
+    if !shared {
+        lobe.decode_rows(raw, decoded, len);
+        return;
+    }
+    let mut block = [0.0f32; MAX_SLOT_PARAMS];
+    for (v, row) in block.iter_mut().zip(raw.chunks_exact(len)) {
+        *v = row[0];
+    }
+    let mut out = [0.0f32; MAX_PARAMS];
+    let out = &mut out[..decoded.len() / len];
+    lobe.decode(&block[..raw.len() / len], out);
+    for (row, &v) in decoded.chunks_exact_mut(len).zip(&*out) {
+        row.fill(v);
+    }
 }
 
 /// Each lane's shading frame (from the staged normal and the caller's tangent, as
 /// `Frame::new`) into the frame rows, and the staged `wo` in it into `local_wo`.
 /// Returns whether a tangent failed.
+#[allow(clippy::too_many_arguments)]
 fn stage_frames(
+    kernels: Kernels,
     input: &MaterialInput<'_>,
     lanes: &[u32],
     len: usize,
@@ -228,21 +260,13 @@ fn stage_frames(
 ) -> bool {
     let mut any = false;
     let frame_rows = grow(&mut rows.frame, 9 * len);
-    let (t, rest) = frame_rows.split_at_mut(3 * len);
-    let (b, n) = rest.split_at_mut(3 * len);
-    let ([tx, ty, tz], [bx, by, bz], [nx, ny, nz]) = (split3(t), split3(b), split3(n));
-    let [sx, sy, sz] = view3(&rows.normal, len);
-    // Every lane's frame from its normal alone first (`Frame::new` without a
-    // tangent), row by row.
-    for j in 0..len {
-        let n = Vec3::new(sx[j], sy[j], sz[j]);
-        let (t, b) = duff_axes(n);
-        (tx[j], ty[j], tz[j]) = (t.x, t.y, t.z);
-        (bx[j], by[j], bz[j]) = (b.x, b.y, b.z);
-        (nx[j], ny[j], nz[j]) = (n.x, n.y, n.z);
-    }
+    // Every lane's frame from its normal alone first (`Frame::new` without a tangent).
+    material_rows::frames(kernels, view3(&rows.normal, len), frame_rows);
     // Then the lanes with a tangent (all-zero ones leave the choice to the library).
     if let Some(tangents) = &input.tangent {
+        let (t, b) = frame_rows.split_at_mut(3 * len);
+        let ([tx, ty, tz], [bx, by, bz]) = (split3(t), split3(&mut b[..3 * len]));
+        let [sx, sy, sz] = view3(&rows.normal, len);
         for (j, &lane) in lanes.iter().enumerate() {
             let lane = lane as usize;
             let (x, y, z) = (tangents.x[lane], tangents.y[lane], tangents.z[lane]);
@@ -263,14 +287,12 @@ fn stage_frames(
             }
         }
     }
-    let [lo_x, lo_y, lo_z] = rows3(&mut rows.local_wo, len);
-    let [wx, wy, wz] = view3(wo, len);
-    for j in 0..len {
-        let w = Vec3::new(wx[j], wy[j], wz[j]);
-        lo_x[j] = w.dot(Vec3::new(tx[j], ty[j], tz[j]));
-        lo_y[j] = w.dot(Vec3::new(bx[j], by[j], bz[j]));
-        lo_z[j] = w.dot(Vec3::new(nx[j], ny[j], nz[j]));
-    }
+    material_rows::to_frames(
+        kernels,
+        &rows.frame[..9 * len],
+        view3(wo, len),
+        &mut rows3(&mut rows.local_wo, len),
+    );
     any
 }
 
@@ -298,10 +320,16 @@ fn stage_blocks(
     let material = input.material;
     let (specs, defaults) = (material.kind().params(), material.params());
     let blocks = grow(&mut rows.input, defaults.len() * len);
-    for (row, &v) in blocks.chunks_exact_mut(len).zip(defaults) {
-        row.fill(v);
-    }
     let n = lanes.len();
+    // The material's values; rows an override gathers over get them in padding only.
+    let mut overridden = [false; MAX_MATERIAL_PARAMS];
+    for o in input.overrides {
+        let at = params::offset_of(specs, o.param as usize);
+        overridden[at..at + o.kind.size()].fill(true);
+    }
+    for ((row, &v), &o) in blocks.chunks_exact_mut(len).zip(defaults).zip(&overridden) {
+        row[if o { n } else { 0 }..].fill(v);
+    }
     let mut any = false;
     for (i, o) in input.overrides.iter().enumerate() {
         let spec = &specs[o.param as usize];
@@ -342,14 +370,6 @@ fn stage_blocks(
     any
 }
 
-/// Slot `k`'s weight rows.
-fn slot_weight(weight: &[f32], k: usize, len: usize) -> [&[f32]; 3] {
-    let w = &weight[k * 3 * len..(k + 1) * 3 * len];
-    let (r, rest) = w.split_at(len);
-    let (g, b) = rest.split_at(len);
-    [r, g, b]
-}
-
 /// `row[j] = src[lanes[j]]`.
 fn gather(row: &mut [f32], src: &[f32], lanes: &[u32]) {
     match (lanes.first(), lanes.last()) {
@@ -364,27 +384,29 @@ fn gather(row: &mut [f32], src: &[f32], lanes: &[u32]) {
     }
 }
 
-/// Each slot's `luminance(weight * albedo(wo))`, then per lane the closure's pruning
-/// and selection rules (`Material::emit`, `closure::selection`) row by row: the same
-/// operations in the same order, so the same probabilities.
+/// Each slot's `weight * albedo(wo)`, then per lane the closure's pruning and
+/// selection rules (`Material::emit`, `closure::selection`) in SIMD: the same
+/// operations in the same order, so the same probabilities. Dropped slots' weights
+/// become 0.
 fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> Result<(), Error> {
     let slots = material.slots();
-    let count = slots.len();
     let rows = &mut s.material;
     // Out of the rows while the kernels read them, put back at the end.
-    let mut share_rows = std::mem::take(&mut rows.shares);
-    let shares = grow(&mut share_rows, MAX_SLOTS * len);
+    let mut albedo_rows = std::mem::take(&mut rows.albedo);
+    let albedo = grow(&mut albedo_rows, MAX_SLOTS * 3 * len);
     // The albedo jobs read (and ignore) probability rows.
     grow(&mut rows.probability, MAX_SLOTS * len);
+    let mut live = [false; MAX_SLOTS];
     for (k, (_, lobe)) in slots.iter().enumerate() {
-        let w = &rows.weight[k * 3 * len..(k + 1) * 3 * len];
-        rows.live[k] = w.iter().any(|&w| w > 0.0);
-        let share = &mut shares[k * len..(k + 1) * len];
-        if !rows.live[k] {
-            share.fill(0.0);
+        // Emitted on some lane: any weight channel > 0.
+        live[k] = rows.weight[k * 3 * len..(k + 1) * 3 * len]
+            .iter()
+            .any(|&w| w > 0.0);
+        if !live[k] {
             continue;
         }
-        let [vr, vg, vb] = rows3(&mut s.value, len);
+        let (r, gb) = albedo[k * 3 * len..(k + 1) * 3 * len].split_at_mut(len);
+        let (g, b) = gb.split_at_mut(len);
         let mut job = AlbedoJob {
             len,
             mode: Transport::Radiance,
@@ -392,130 +414,25 @@ fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> 
             wo: view3(&s.wo, len),
             lobe: rows.lanes(k, lobe.decoded_len(), len),
             store: true,
-            value: [vr, vg, vb],
+            value: [r, g, b],
             out_of_range: false,
         };
         lobe.albedo_lanes(kernels, &mut job);
-        let [r, g, b] = view3(&s.value, len);
-        for j in 0..len {
-            share[j] = Rgb::new(r[j], g[j], b[j]).luminance();
-        }
     }
-    let weight = &mut rows.weight;
-    // `keep[k]`: 1 where slot k is emitted and kept. Emitted: any weight channel > 0.
-    let [kept, strongest, strongest_share] = rows3(&mut s.sample_value, len);
-    kept.fill(0.0);
-    strongest.fill(-1.0);
-    strongest_share.fill(f32::NEG_INFINITY);
-    let keep = grow(&mut rows.probability, MAX_SLOTS * len);
-    let prune = material.prune();
-    for k in 0..count {
-        let [wr, wg, wb] = slot_weight(weight, k, len);
-        let (keep, share) = (&mut keep[k * len..][..len], &shares[k * len..][..len]);
-        for j in 0..len {
-            let emitted = (wr[j] > 0.0) | (wg[j] > 0.0) | (wb[j] > 0.0);
-            let is_kept = emitted & (share[j] >= prune);
-            keep[j] = if is_kept { 1.0 } else { 0.0 };
-            kept[j] += keep[j];
-            // The first strongest pruned slot, kept when every slot is pruned.
-            let stronger = emitted & !is_kept & (share[j] > strongest_share[j]);
-            strongest_share[j] = if stronger {
-                share[j]
-            } else {
-                strongest_share[j]
-            };
-            strongest[j] = if stronger { k as f32 } else { strongest[j] };
-        }
-    }
-    for k in 0..count {
-        let keep = &mut keep[k * len..][..len];
-        for j in 0..len {
-            let fallback = (kept[j] == 0.0) & (strongest[j] == k as f32);
-            keep[j] = if fallback { 1.0 } else { keep[j] };
-        }
-    }
-    selection_rows(keep, shares, weight, count, len, &mut s.pdf_reverse);
-    for k in 0..count {
-        let p = &rows.probability[k * len..(k + 1) * len];
-        for c in 0..3 {
-            for (w, &p) in weight[(k * 3 + c) * len..][..len].iter_mut().zip(p) {
-                *w = if p > 0.0 { *w } else { 0.0 };
-            }
-        }
-        rows.live[k] = p.iter().any(|&p| p > 0.0);
-    }
-    rows.shares = share_rows;
+    let mut job = SelectJob {
+        len,
+        count: slots.len(),
+        live,
+        prune: material.prune(),
+        albedo,
+        weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
+        probability: grow(&mut rows.probability, MAX_SLOTS * len),
+        kept: [false; MAX_SLOTS],
+    };
+    material_rows::select(kernels, &mut job);
+    rows.live = job.kept;
+    rows.albedo = albedo_rows;
     Ok(())
-}
-
-/// `closure::selection` of each lane's kept slots, row by row: `p` holds 1 where a
-/// slot is kept (0 elsewhere) and becomes its selection probability. The shares
-/// (or weights' luminances, or ones) of kept slots, divided by the largest and then
-/// by their sum in slot order; a single kept slot gets 1.
-fn selection_rows(
-    p: &mut [f32],
-    shares: &[f32],
-    weight: &[f32],
-    count: usize,
-    len: usize,
-    scratch: &mut Vec<f32>,
-) {
-    let sums = grow(scratch, 3 * len);
-    let (kept, rest) = sums.split_at_mut(len);
-    let (share_sum, weight_sum) = rest.split_at_mut(len);
-    kept.fill(0.0);
-    share_sum.fill(0.0);
-    weight_sum.fill(0.0);
-    for k in 0..count {
-        let [wr, wg, wb] = slot_weight(weight, k, len);
-        let (keep, share) = (&p[k * len..][..len], &shares[k * len..][..len]);
-        for j in 0..len {
-            kept[j] += keep[j];
-            share_sum[j] += keep[j] * share[j].max(0.0);
-            weight_sum[j] += keep[j] * Rgb::new(wr[j], wg[j], wb[j]).luminance().max(0.0);
-        }
-    }
-    // The value each kept slot is weighted by: `p[k]` becomes it, then its share.
-    for k in 0..count {
-        let [wr, wg, wb] = slot_weight(weight, k, len);
-        let (p, share) = (&mut p[k * len..][..len], &shares[k * len..][..len]);
-        for j in 0..len {
-            let by = if kept[j] == 1.0 {
-                1.0
-            } else if share_sum[j] > 0.0 {
-                share[j].max(0.0)
-            } else if weight_sum[j] > 0.0 {
-                Rgb::new(wr[j], wg[j], wb[j]).luminance().max(0.0)
-            } else {
-                1.0
-            };
-            p[j] *= by;
-        }
-    }
-    // Divided by the largest, then by the sum in slot order (`normalize_shares`).
-    let largest = share_sum;
-    largest.fill(0.0);
-    for k in 0..count {
-        let p = &p[k * len..][..len];
-        for j in 0..len {
-            largest[j] = largest[j].max(p[j]);
-        }
-    }
-    let total = weight_sum;
-    total.fill(0.0);
-    for k in 0..count {
-        let p = &mut p[k * len..][..len];
-        for j in 0..len {
-            p[j] /= largest[j];
-            total[j] += p[j];
-        }
-    }
-    for k in 0..count {
-        let p = &mut p[k * len..][..len];
-        for j in 0..len {
-            p[j] /= total[j];
-        }
-    }
 }
 
 /// The chunks of active lanes of `range`: `f(lanes)` for each.
@@ -530,6 +447,11 @@ fn for_chunks(
     let mut lane = range.start;
     while lane < range.end && result.is_ok() {
         lanes.clear();
+        if input.active.is_none() {
+            let end = range.end.min(lane + CHUNK);
+            lanes.extend(lane as u32..end as u32);
+            lane = end;
+        }
         while lane < range.end && lanes.len() < CHUNK {
             if input.is_active(lane) {
                 lanes.push(lane as u32);
@@ -562,16 +484,14 @@ fn eval_chunk(
         pdf_reverse,
         ..
     } = s;
-    for row in rows3(value, len) {
-        row.fill(0.0);
-    }
-    grow(pdf, len).fill(0.0);
-    grow(pdf_reverse, len).fill(0.0);
+    let ([vr, vg, vb], pdf, pdf_reverse) =
+        (rows3(value, len), grow(pdf, len), grow(pdf_reverse, len));
+    // The first live slot stores, the others add; without one, zeros.
+    let mut first = true;
     for (k, (_, lobe)) in material.slots().iter().enumerate() {
         if !rows.live[k] {
             continue;
         }
-        let [vr, vg, vb] = &mut *value;
         let mut job = EvalJob {
             len,
             mode: Transport::Radiance,
@@ -579,7 +499,7 @@ fn eval_chunk(
             wo: view3(wo, len),
             wi: view3(wi, len),
             lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-            store: false,
+            store: first,
             value: want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
             pdf: &mut pdf[..len],
             except: None,
@@ -596,13 +516,31 @@ fn eval_chunk(
             };
             lobe.eval_lanes(kernels, &mut job);
         }
+        first = false;
+    }
+    if first {
+        for row in [vr, vg, vb, pdf, pdf_reverse] {
+            row.fill(0.0);
+        }
     }
 }
 
 /// `out[lane] = staged[j]`, 0 for failed lanes.
 fn scatter(lanes: &[u32], base: usize, failed: &[u8], staged: &[f32], out: &mut [f32]) {
-    for (j, &lane) in lanes.iter().enumerate() {
-        out[lane as usize - base] = if failed[j] != 0 { 0.0 } else { staged[j] };
+    let (n, first) = (lanes.len(), lanes[0] as usize - base);
+    if lanes[n - 1] as usize - base - first + 1 != n {
+        for (j, &lane) in lanes.iter().enumerate() {
+            out[lane as usize - base] = if failed[j] != 0 { 0.0 } else { staged[j] };
+        }
+        return;
+    }
+    // Consecutive lanes: one copy, then the failed ones zeroed.
+    let out = &mut out[first..first + n];
+    out.copy_from_slice(&staged[..n]);
+    if failed[..n].contains(&1) {
+        for (o, _) in out.iter_mut().zip(&failed[..n]).filter(|&(_, &f)| f != 0) {
+            *o = 0.0;
+        }
     }
 }
 
@@ -736,30 +674,23 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
             for_chunks(input, start..end, s, |lanes, s| {
                 let len = padded(lanes.len());
                 stage_chunk(exec.kernels, input, lanes, len, s, &mut failure)?;
-                let mut sum = [vec![0.0f32; len], vec![0.0f32; len], vec![0.0f32; len]];
-                for (k, (_, lobe)) in input.material.slots().iter().enumerate() {
-                    if !s.material.live[k] {
-                        continue;
-                    }
-                    let [vr, vg, vb] = rows3(&mut s.value, len);
-                    let mut job = AlbedoJob {
-                        len,
-                        mode: Transport::Radiance,
-                        directions: Directions::Unit,
-                        wo: view3(&s.wo, len),
-                        lobe: s.material.lanes(k, lobe.decoded_len(), len),
-                        store: true,
-                        value: [vr, vg, vb],
-                        out_of_range: false,
-                    };
-                    lobe.albedo_lanes(exec.kernels, &mut job);
-                    for (sum, v) in sum.iter_mut().zip(&s.value) {
-                        for (a, b) in sum.iter_mut().zip(v) {
-                            *a += b;
+                // The kept slots' `weight * albedo`, as pruning computed them (a dropped
+                // slot's weight is 0 on its lane).
+                let sum = rows3(&mut s.value, len);
+                let rows = &s.material;
+                for row in sum {
+                    row.fill(0.0);
+                }
+                for k in (0..input.material.slots().len()).filter(|&k| rows.live[k]) {
+                    let p = &rows.probability[k * len..][..len];
+                    for (c, sum) in s.value.iter_mut().enumerate() {
+                        let a = &rows.albedo[(3 * k + c) * len..][..len];
+                        for j in 0..len {
+                            sum[j] += if p[j] > 0.0 { a[j] } else { 0.0 };
                         }
                     }
                 }
-                for (staged, out) in sum.iter().zip([&mut *out.x, &mut *out.y, &mut *out.z]) {
+                for (staged, out) in s.value.iter().zip([&mut *out.x, &mut *out.y, &mut *out.z]) {
                     scatter(lanes, start, &s.failed, staged, out);
                 }
                 Ok(())
@@ -819,19 +750,24 @@ fn sample_chunk(
     let n = lanes.len();
     stage_chunk(kernels, input, lanes, len, s, failure)?;
     let slots = input.material.slots();
-    // The lobe choice, as `Closure::sample` makes it.
-    let chosen = grow(&mut s.chosen, len);
-    let [uc, u0, u1] = rows3(&mut s.u, len);
-    let mut probabilities = [0.0f32; MAX_SLOTS];
-    for j in 0..len {
-        let lane = lanes[j.min(n - 1)] as usize;
-        for (k, p) in probabilities[..slots.len()].iter_mut().enumerate() {
-            *p = s.material.probability[k * len + j];
-        }
-        let (k, reused) =
-            mixture::choose(&probabilities[..slots.len()], u.u_lobe[lane]).unwrap_or((0.0, 0.5));
-        (chosen[j], uc[j], u0[j], u1[j]) = (k, reused, u.u0[lane], u.u1[lane]);
+    // The random numbers, padding lanes repeating the last lane's; then the lobe
+    // choice, as `Closure::sample` makes it.
+    for (row, src) in rows3(&mut s.u, len).into_iter().zip([u.u_lobe, u.u0, u.u1]) {
+        gather(&mut row[..n], src, lanes);
+        let last = row[n - 1];
+        row[n..].fill(last);
     }
+    material_rows::choose(
+        kernels,
+        &mut ChooseJob {
+            len,
+            count: slots.len(),
+            probability: &s.material.probability[..slots.len() * len],
+            u: &mut s.u[0][..len],
+            chosen: grow(&mut s.chosen, len),
+        },
+    );
+    let chosen = &s.chosen[..len];
     let mut any = [false; MAX_SLOTS];
     for &k in &chosen[..n] {
         any[k as usize] = true;
@@ -878,13 +814,18 @@ fn sample_chunk(
     }
     // The chosen slot's own value and `p_k` times its pdf, then the other slots'
     // evals at the sampled direction.
-    let [vr, vg, vb] = rows3(value, len);
-    let pdf = grow(pdf, len);
-    for j in 0..len {
-        let k = chosen[j] as usize;
-        (vr[j], vg[j], vb[j]) = (sv_r[j], sv_g[j], sv_b[j]);
-        pdf[j] = rows.probability[k * len + j] * sample_pdf[j];
+    for (v, sv) in rows3(value, len).into_iter().zip([&*sv_r, &*sv_g, &*sv_b]) {
+        v.copy_from_slice(&sv[..len]);
     }
+    let pdf = grow(pdf, len);
+    material_rows::chosen_pdf(
+        kernels,
+        &rows.probability[..slots.len() * len],
+        slots.len(),
+        &chosen[..len],
+        &mut sample_pdf[..len],
+        pdf,
+    );
     for (k, (_, lobe)) in slots.iter().enumerate() {
         if !rows.live[k] || chosen[..n].iter().all(|&c| c as usize == k) {
             continue;
@@ -905,16 +846,51 @@ fn sample_chunk(
         };
         lobe.eval_lanes(kernels, &mut job);
     }
-    for (j, &lane) in lanes.iter().enumerate() {
-        let at = lane as usize - base;
-        let k = s.chosen[j] as usize;
-        let r = if s.failed[j] != 0 {
-            SampleResult::FAILED
-        } else {
-            let p = s.material.probability[k * len + j];
-            finish_lane(s, j, k, p, true)
-        };
-        out.write(at, &r);
+    // `sample_pdf` holds `p_k pdf_k` now: the chosen slot's probability is 1 below.
+    let first = lanes[0] as usize - base;
+    if lanes[n - 1] as usize - lanes[0] as usize + 1 == n {
+        finish_in_place(kernels, s, slots.len(), first..first + n, out);
+        if s.any_failed {
+            for (&lane, _) in lanes.iter().zip(&s.failed).filter(|&(_, &f)| f != 0) {
+                out.write(lane as usize - base, &SampleResult::FAILED);
+            }
+        }
+    } else {
+        for (j, &lane) in lanes.iter().enumerate() {
+            let r = if s.failed[j] != 0 {
+                SampleResult::FAILED
+            } else {
+                finish_lane(s, j, s.chosen[j] as usize, 1.0, true)
+            };
+            out.write(lane as usize - base, &r);
+        }
     }
     Ok(())
+}
+
+/// The samples of a chunk of consecutive lanes finished in SIMD (`mixture::finish`)
+/// straight into the caller's rows `local`.
+fn finish_in_place(
+    kernels: Kernels,
+    s: &Scratch,
+    slots: usize,
+    local: Range<usize>,
+    out: &mut SampleOutput<'_>,
+) {
+    let n = local.len();
+    let mut job = FinishJob {
+        len: n,
+        probabilities: &[1.0; MAX_SLOTS][..slots],
+        chosen: &s.chosen[..n],
+        wi: view3(&s.wi, n),
+        own_value: view3(&s.sample_value, n),
+        own_pdf: &s.sample_pdf[..n],
+        events: &s.events[..n],
+        eta: &s.eta[..n],
+        roughness: &s.roughness[..n],
+        value: view3(&s.value, n),
+        pdf: &s.pdf[..n],
+        out: out.finish_rows(&local),
+    };
+    finish_mixture(kernels, &mut job);
 }

@@ -920,6 +920,21 @@ impl SampleOutput<'_> {
         Ok(())
     }
 
+    /// The outputs of lanes `local`, as a finish kernel writes them.
+    fn finish_rows(&mut self, local: &Range<usize>) -> FinishOutput<'_> {
+        FinishOutput {
+            wi: rows_mut(&mut self.wi, local),
+            pdf: &mut self.pdf[local.clone()],
+            weight: rows_mut(&mut self.weight, local),
+            value: self.value.as_mut().map(|v| rows_mut(v, local)),
+            flags: self.flags.as_deref_mut().map(|f| &mut f[local.clone()]),
+            lobe: self.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
+            component: self.component.as_deref_mut().map(|k| &mut k[local.clone()]),
+            eta: self.eta.as_deref_mut().map(|e| &mut e[local.clone()]),
+            roughness: self.roughness.as_deref_mut().map(|r| &mut r[local.clone()]),
+        }
+    }
+
     fn write(&mut self, i: usize, s: &SampleResult) {
         self.wi.set(i, [s.wi.x, s.wi.y, s.wi.z]);
         self.pdf[i] = s.pdf;

@@ -1,0 +1,272 @@
+//! The rows of a material batch (`crate::batch::material`) around its lobe kernels,
+//! one register of lanes at a time: shading frames from normals and `wo` in them,
+//! pruning and selection probabilities from each slot's `weight * albedo`, and the
+//! slot each sample chooses. Each repeats, per lane, the scalar closure's operations
+//! in the same order (`Frame::new`, `Material::emit`, `closure::selection`,
+//! `mixture::choose`), so the rows hold the bits a closure per lane would.
+
+use super::load_row3;
+use super::mixture::clamp_random;
+use crate::materials::MAX_SLOTS;
+use crate::math::frame::duff_axes;
+use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
+use crate::simd::kernel;
+
+/// `frame` (nine rows of `len`: t, b, n, each x, y, z) from unit normals (`Frame::new`
+/// without a tangent).
+#[inline(always)]
+fn frames_body<L: Lane>(normal: [&[f32]; 3], frame: &mut [f32]) {
+    let len = normal[0].len();
+    debug_assert!(len.is_multiple_of(L::LANES) && frame.len() >= 9 * len);
+    for i in (0..len).step_by(L::LANES) {
+        let n = Vec3::new(
+            L::load(&normal[0][i..]),
+            L::load(&normal[1][i..]),
+            L::load(&normal[2][i..]),
+        );
+        let (t, b) = duff_axes(n);
+        let axes = [t.x, t.y, t.z, b.x, b.y, b.z, n.x, n.y, n.z];
+        for (row, v) in axes.into_iter().enumerate() {
+            v.store(&mut frame[row * len + i..]);
+        }
+    }
+}
+
+/// Unit `wo` rows into each lane's `frame` (rows as [`frames_body`] writes them).
+#[inline(always)]
+fn to_frames_body<L: Lane>(frame: &[f32], wo: [&[f32]; 3], local: &mut [&mut [f32]; 3]) {
+    let len = wo[0].len();
+    for i in (0..len).step_by(L::LANES) {
+        let f = LaneFrame {
+            t: load_row3::<L>(frame, len, 0, i),
+            b: load_row3(frame, len, 1, i),
+            n: load_row3(frame, len, 2, i),
+        };
+        let w = Vec3::new(
+            L::load(&wo[0][i..]),
+            L::load(&wo[1][i..]),
+            L::load(&wo[2][i..]),
+        );
+        let l = f.to_local(w);
+        for (v, row) in [l.x, l.y, l.z].into_iter().zip(local.iter_mut()) {
+            v.store(&mut row[i..]);
+        }
+    }
+}
+
+/// Pruning and selection over a chunk's slots.
+pub struct SelectJob<'a> {
+    /// Lanes, a multiple of [`super::LANE_MULTIPLE`].
+    pub len: usize,
+    /// The material's slots.
+    pub count: usize,
+    /// Slots whose `albedo` rows are written (the others emit on no lane).
+    pub live: [bool; MAX_SLOTS],
+    /// `Material::prune`: a slot whose share is below it is dropped.
+    pub prune: f32,
+    /// `weight * albedo(wo)` of slot `k`, channel `c` of lane `j` at `(3 k + c) len + j`.
+    pub albedo: &'a [f32],
+    /// Slot weights, laid out as `albedo`; zeroed where the slot is dropped.
+    pub weight: &'a mut [f32],
+    /// Selection probability of slot `k` of lane `j` at `k len + j` (0 where dropped).
+    pub probability: &'a mut [f32],
+    /// Out: slots with a nonzero probability on some lane.
+    pub kept: [bool; MAX_SLOTS],
+}
+
+#[inline(always)]
+fn rgb_at<L: Lane>(rows: &[f32], k: usize, len: usize, i: usize) -> Rgb<L> {
+    Rgb::new(
+        L::load(&rows[3 * k * len + i..]),
+        L::load(&rows[(3 * k + 1) * len + i..]),
+        L::load(&rows[(3 * k + 2) * len + i..]),
+    )
+}
+
+/// [`select_slots`] with the slot count a constant, so its loops unroll and its
+/// per-slot values stay in registers.
+#[inline(always)]
+fn select_body<L: Lane>(job: &mut SelectJob<'_>) {
+    match job.count {
+        0 => {}
+        1 => select_slots::<L, 1>(job),
+        2 => select_slots::<L, 2>(job),
+        3 => select_slots::<L, 3>(job),
+        4 => select_slots::<L, 4>(job),
+        5 => select_slots::<L, 5>(job),
+        6 => select_slots::<L, 6>(job),
+        7 => select_slots::<L, 7>(job),
+        _ => select_slots::<L, MAX_SLOTS>(job),
+    }
+}
+
+#[inline(always)]
+fn select_slots<L: Lane, const COUNT: usize>(job: &mut SelectJob<'_>) {
+    debug_assert_eq!(job.count, COUNT);
+    let len = job.len;
+    let (zero, one) = (L::zero(), L::one());
+    let mut share = [zero; COUNT];
+    let mut keep = [zero; COUNT];
+    let mut weight = [Rgb::zero(); COUNT];
+    for i in (0..len).step_by(L::LANES) {
+        // `Material::emit`: an emitted slot (some weight channel > 0) is kept unless its
+        // share is below `prune`; the first strongest pruned slot is kept when every
+        // slot is pruned.
+        let mut kept = zero;
+        let mut strongest = L::splat(-1.0);
+        let mut strongest_share = L::splat(f32::NEG_INFINITY);
+        for k in 0..COUNT {
+            let w = rgb_at::<L>(job.weight, k, len, i);
+            weight[k] = w;
+            share[k] = if job.live[k] {
+                rgb_at::<L>(job.albedo, k, len, i).luminance()
+            } else {
+                zero
+            };
+            let emitted = w.r.gt(zero) | w.g.gt(zero) | w.b.gt(zero);
+            let is_kept = emitted & share[k].ge(L::splat(job.prune));
+            keep[k] = L::select(is_kept, one, zero);
+            kept += keep[k];
+            let stronger = emitted & !is_kept & share[k].gt(strongest_share);
+            strongest_share = L::select(stronger, share[k], strongest_share);
+            strongest = L::select(stronger, L::splat(k as f32), strongest);
+        }
+        let none = kept.eq(zero);
+        // `closure::selection` of the kept slots: 1 for a single one, else their
+        // shares, or their weights' luminances, or ones, whichever first sums above 0.
+        let (mut n, mut share_sum, mut weight_sum) = (zero, zero, zero);
+        for k in 0..COUNT {
+            let fallback = none & strongest.eq(L::splat(k as f32));
+            keep[k] = L::select(fallback, one, keep[k]);
+            n += keep[k];
+            share_sum += keep[k] * share[k].max(zero);
+            weight_sum += keep[k] * weight[k].luminance().max(zero);
+        }
+        let mut largest = zero;
+        for k in 0..COUNT {
+            let by = L::select(
+                share_sum.gt(zero),
+                share[k].max(zero),
+                L::select(weight_sum.gt(zero), weight[k].luminance().max(zero), one),
+            );
+            keep[k] *= L::select(n.eq(one), one, by);
+            largest = largest.max(keep[k]);
+        }
+        // `normalize_shares`: divided by the largest, then by the sum in slot order. A
+        // lane without any emitted slot keeps zeros.
+        let largest = L::select(largest.gt(zero), largest, one);
+        let mut total = zero;
+        for p in &mut keep {
+            *p = *p / largest;
+            total += *p;
+        }
+        let total = L::select(total.gt(zero), total, one);
+        for k in 0..COUNT {
+            let p = keep[k] / total;
+            let on = p.gt(zero);
+            job.kept[k] |= on.any();
+            p.store(&mut job.probability[k * len + i..]);
+            let w = Rgb::select(on, weight[k], Rgb::zero());
+            for (c, v) in w.to_array().into_iter().enumerate() {
+                v.store(&mut job.weight[(3 * k + c) * len + i..]);
+            }
+        }
+    }
+}
+
+/// The slot each lane's `u` chooses by its probabilities, and `u` rescaled within
+/// the slot's bin.
+pub struct ChooseJob<'a> {
+    pub len: usize,
+    pub count: usize,
+    /// Rows as [`SelectJob::probability`].
+    pub probability: &'a [f32],
+    /// In: the lanes' `u_lobe`; out: `u` rescaled for the chosen slot.
+    pub u: &'a mut [f32],
+    /// The chosen slot (as a float index).
+    pub chosen: &'a mut [f32],
+}
+
+/// `mixture::choose` with a probability row per lane: the same bins, the same
+/// round-off rule; a lane without any slot to choose gets slot 0 and `u` 0.5 (as
+/// the scalar loop it replaces).
+#[inline(always)]
+fn choose_body<L: Lane>(job: &mut ChooseJob<'_>) {
+    let len = job.len;
+    for i in (0..len).step_by(L::LANES) {
+        let x = L::load(&job.u[i..]);
+        // A NaN `u` clamps to 0, as `f32::max` takes it.
+        let u = clamp_random(L::select(x.ge(L::zero()), x, L::zero()));
+        let mut found = L::Mask::splat(false);
+        let mut any = L::Mask::splat(false);
+        let (mut index, mut start, mut width) = (L::zero(), L::zero(), L::zero());
+        let (mut last, mut p_last) = (L::zero(), L::zero());
+        let mut end = L::zero();
+        for k in 0..job.count {
+            let p = L::load(&job.probability[k * len + i..]);
+            let bin_start = end;
+            end += p;
+            let positive = p.gt(L::zero());
+            let hit = positive & !found & u.lt(end);
+            let slot = L::splat(k as f32);
+            index = L::select(hit, slot, index);
+            start = L::select(hit, bin_start, start);
+            width = L::select(hit, p, width);
+            found = found | hit;
+            last = L::select(positive, slot, last);
+            p_last = L::select(positive, p, p_last);
+            any = any | positive;
+        }
+        index = L::select(found, index, last);
+        start = L::select(found, start, L::one() - p_last);
+        width = L::select(found, width, p_last);
+        let reused = clamp_random((u - start) / width);
+        L::select(any, index, L::zero()).store(&mut job.chosen[i..]);
+        L::select(any, reused, L::splat(0.5)).store(&mut job.u[i..]);
+    }
+}
+
+/// The chosen slot's selection probability times its own sample's pdf, into both
+/// `own_pdf` (in: the sample's pdf) and `pdf` (where the other slots' pdfs add).
+#[inline(always)]
+fn chosen_pdf_body<L: Lane>(
+    probability: &[f32],
+    count: usize,
+    chosen: &[f32],
+    own_pdf: &mut [f32],
+    pdf: &mut [f32],
+) {
+    let len = chosen.len();
+    for i in (0..len).step_by(L::LANES) {
+        let k = L::load(&chosen[i..]);
+        let mut p = L::zero();
+        for slot in 0..count {
+            let row = L::load(&probability[slot * len + i..]);
+            p = L::select(k.eq(L::splat(slot as f32)), row, p);
+        }
+        let v = p * L::load(&own_pdf[i..]);
+        v.store(&mut own_pdf[i..]);
+        v.store(&mut pdf[i..]);
+    }
+}
+
+kernel!(
+    /// Frames from unit normal rows (`frames_body`).
+    frames<>(normal: [&[f32]; 3], frame: &mut [f32]) => frames_body
+);
+kernel!(
+    /// `wo` rows into per-lane frames (`to_frames_body`).
+    to_frames<>(frame: &[f32], wo: [&[f32]; 3], local: &mut [&mut [f32]; 3]) => to_frames_body
+);
+kernel!(
+    /// Pruning and selection probabilities (`select_body`).
+    select<>(job: &mut SelectJob<'_>) => select_body
+);
+kernel!(
+    /// Each lane's slot choice (`choose_body`).
+    choose<>(job: &mut ChooseJob<'_>) => choose_body
+);
+kernel!(
+    /// `p_k pdf_k` of each lane's chosen slot (`chosen_pdf_body`).
+    chosen_pdf<>(probability: &[f32], count: usize, chosen: &[f32], own_pdf: &mut [f32], pdf: &mut [f32]) => chosen_pdf_body
+);
