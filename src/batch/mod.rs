@@ -18,7 +18,9 @@ mod stage;
 
 use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
-use crate::kernels::{AlbedoJob, ClosureRows, Directions, EvalJob, LobeLanes, SampleJob, mixture};
+use crate::kernels::{
+    AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, mixture,
+};
 use crate::kernels::{
     FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize, permute, sort_lanes,
     to_local, unpack_events,
@@ -378,7 +380,7 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     // In place needs no scratch buffers: a chunk takes them only to be staged. Its
     // directions in a frame all its lobes share go on the stack.
     let mut local = [[0.0f32; CHUNK]; 6];
-    in_chunks(start..end, |chunk| {
+    in_chunks(start..end, CHUNK, |chunk| {
         let (wo, range) = (input.wo, chunk.clone());
         if eval_in_place(kernels, closure, wo, wi, range, start, &mut local, out) {
             Ok(())
@@ -402,14 +404,24 @@ fn in_place<'a, C: ClosureSource<'a>>(input: &BatchInput<'a, C>) -> Option<&'a C
     (c.is_finished() && c.lobes().iter().all(|l| l.lobe.has_kernels())).then_some(c)
 }
 
-/// Run `chunk` on every chunk of `range`; every chunk runs, the first error wins.
+/// Lanes of a chunk of an in-place mixture sample: its many jobs (a sample, evals on
+/// the other lobes' runs and a finish per lobe) read their lobe's parameters once
+/// per job, and its rows stay in the L2 cache.
+const MIXTURE_CHUNK: usize = 1024;
+
+/// Rows of a mixture chunk sorted by lobe, each lobe's run in whole registers.
+const MIXTURE_ROWS: usize = MIXTURE_CHUNK + MAX_LOBES * LANE_MULTIPLE;
+
+/// Run `chunk` on every chunk of `size` lanes of `range`; every chunk runs, the
+/// first error wins.
 fn in_chunks(
     range: Range<usize>,
+    size: usize,
     mut chunk: impl FnMut(Range<usize>) -> Result<(), Error>,
 ) -> Result<(), Error> {
     let mut result = Ok(());
-    for lo in range.clone().step_by(CHUNK) {
-        let r = chunk(lo..(lo + CHUNK).min(range.end));
+    for lo in range.clone().step_by(size) {
+        let r = chunk(lo..(lo + size).min(range.end));
         if result.is_ok() {
             result = r;
         }
@@ -789,7 +801,7 @@ pub fn albedo<'a, C: ClosureSource<'a>>(
         let Some(closure) = in_place(input) else {
             return staged(start..end, &mut out);
         };
-        in_chunks(start..end, |chunk| {
+        in_chunks(start..end, CHUNK, |chunk| {
             if albedo_in_place(kernels, closure, input.wo, chunk.clone(), start, &mut out) {
                 Ok(())
             } else {
@@ -1006,10 +1018,15 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     let Some(closure) = in_place(input).filter(|c| !c.lobes().is_empty()) else {
         return sample_staged(kernels, input, u, start..end, start, s, out);
     };
-    s.reserve_rows(padded(CHUNK))?;
     // One lobe, which every lane chooses: finished in the kernel.
     let one_lobe = closure.lobes().len() == 1 && closure.lobes()[0].probability == 1.0;
-    in_chunks(start..end, |chunk| {
+    let (size, rows) = if one_lobe {
+        (CHUNK, padded(CHUNK))
+    } else {
+        (MIXTURE_CHUNK, MIXTURE_ROWS)
+    };
+    s.reserve_rows(rows)?;
+    in_chunks(start..end, size, |chunk| {
         let done = if one_lobe {
             sample_in_place(kernels, closure, input.wo, u, chunk.clone(), start, s, out)
         } else {
@@ -1059,19 +1076,21 @@ fn mixture_in_place(
     }
     let mut starts = [0usize; MAX_LOBES + 1];
     let c = &mut s.compact;
-    let (order, rank) = (grow(&mut c.order, n), grow(&mut c.rank, n));
+    let order = grow(&mut c.order, n + count * LANE_MULTIPLE);
+    let rank = grow(&mut c.rank, n);
     sort_lanes(kernels, &s.chosen[..n], &mut starts[..=count], order, rank);
-    // Inputs in that order; `wo` padded with +z and normalized as staging does (the
-    // other lobes are evaluated at the sampled `wi` as it is returned, so their jobs
-    // take unit directions).
-    let len = padded(n);
+    // Rows in that order: every run in whole registers, pads copying lane 0.
+    let len = starts[count];
+    // Inputs in that order, `wo` normalized as staging does (the other lobes are
+    // evaluated at the sampled `wi` as it is returned, so their jobs take unit
+    // directions).
     let [wo_x, wo_y, wo_z] = rows(wo, &lanes);
     let [c_wo, c_u] = [&mut c.wo, &mut c.u].map(|r| rows3(r, len));
     let [a, b, c3] = c_wo;
     let [d, e, f] = c_u;
     permute(
         kernels,
-        &c.order[..n],
+        &c.order[..len],
         &[
             wo_x,
             wo_y,
@@ -1080,25 +1099,15 @@ fn mixture_in_place(
             &u.u0[lanes.clone()],
             &u.u1[lanes.clone()],
         ],
-        &mut [
-            &mut a[..n],
-            &mut b[..n],
-            &mut c3[..n],
-            &mut d[..n],
-            &mut e[..n],
-            &mut f[..n],
-        ],
+        &mut [a, b, c3, d, e, f],
     );
-    for (row, pad) in c.wo.iter_mut().zip([0.0, 0.0, 1.0]) {
-        row[n..len].fill(pad);
-    }
     if normalize(kernels, &mut rows3(&mut c.wo, len), len) {
         return false;
     }
     // Each lobe samples its run.
-    let (mut wi, mut own_value) = (rows3(&mut s.wi, n), rows3(&mut s.sample_value, n));
-    let (own_pdf, eta) = (grow(&mut s.sample_pdf, n), grow(&mut s.eta, n));
-    let (roughness, events) = (grow(&mut s.roughness, n), grow(&mut s.events, n));
+    let (mut wi, mut own_value) = (rows3(&mut s.wi, len), rows3(&mut s.sample_value, len));
+    let (own_pdf, eta) = (grow(&mut s.sample_pdf, len), grow(&mut s.eta, len));
+    let (roughness, events) = (grow(&mut s.roughness, len), grow(&mut s.events, len));
     for (k, l) in closure.lobes().iter().enumerate() {
         let run = starts[k]..starts[k + 1];
         if run.is_empty() {
@@ -1128,45 +1137,45 @@ fn mixture_in_place(
     }
     // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
     // their jobs would (`Directions::Sampled`).
-    let mut local_rows = [[0.0f32; CHUNK]; 6];
+    let mut local_rows = [[0.0f32; MIXTURE_ROWS]; 6];
     let (wo_rows, wi_rows, directions) = match shared_frame(closure) {
         Some(frame) => {
             let [a, b, c3, d, e, f] = &mut local_rows;
-            let mut wo_local = [&mut a[..n], &mut b[..n], &mut c3[..n]];
-            let mut wi_local = [&mut d[..n], &mut e[..n], &mut f[..n]];
+            let mut wo_local = [&mut a[..len], &mut b[..len], &mut c3[..len]];
+            let mut wi_local = [&mut d[..len], &mut e[..len], &mut f[..len]];
             let unit = to_local(
                 kernels,
                 &frame,
                 Directions::Unit,
-                view3(&c.wo, n),
+                view3(&c.wo, len),
                 &mut wo_local,
             );
             let sampled = to_local(
                 kernels,
                 &frame,
                 Directions::Sampled,
-                view3(&s.wi, n),
+                view3(&s.wi, len),
                 &mut wi_local,
             );
             debug_assert!(unit && sampled, "only raw directions can be out of range");
             let [a, b, c3, d, e, f] = &local_rows;
             (
-                [&a[..n], &b[..n], &c3[..n]],
-                [&d[..n], &e[..n], &f[..n]],
+                [&a[..len], &b[..len], &c3[..len]],
+                [&d[..len], &e[..len], &f[..len]],
                 Directions::Local,
             )
         }
-        None => (view3(&c.wo, n), view3(&s.wi, n), Directions::Sampled),
+        None => (view3(&c.wo, len), view3(&s.wi, len), Directions::Sampled),
     };
     // The mixture summed in lobe order, as `Closure::sample` sums it: each lobe
     // evaluated on the other lobes' runs, its own run adding its sample.
-    for row in rows3(&mut s.value, n) {
+    for row in rows3(&mut s.value, len) {
         row.fill(0.0);
     }
-    grow(&mut s.pdf, n).fill(0.0);
+    grow(&mut s.pdf, len).fill(0.0);
     for (k, l) in closure.lobes().iter().enumerate() {
         let own = starts[k]..starts[k + 1];
-        for run in [0..own.start, own.end..n] {
+        for run in [0..own.start, own.end..len] {
             if run.is_empty() {
                 continue;
             }
@@ -1202,13 +1211,13 @@ fn mixture_in_place(
     let (want_value, want_eta) = (out.value.is_some(), out.eta.is_some());
     let want_roughness = out.roughness.is_some();
     for rows in [&mut c.wi, &mut c.weight, &mut c.value] {
-        rows3(rows, n);
+        rows3(rows, len);
     }
     for row in [&mut c.pdf, &mut c.eta, &mut c.roughness] {
-        grow(row, n);
+        grow(row, len);
     }
     for row in [&mut s.flags, &mut s.lobe_index, &mut s.component] {
-        grow(row, n);
+        grow(row, len);
     }
     for (k, &probability) in probabilities.iter().enumerate() {
         let run = starts[k]..starts[k + 1];
@@ -1260,25 +1269,35 @@ fn mixture_in_place(
     let rank = &c.rank[..n];
     let [wx, wy, wz] = rows_mut(&mut out.wi, &local);
     let [gr, gg, gb] = rows_mut(&mut out.weight, &local);
-    let [cx, cy, cz] = view3(&c.wi, n);
-    let [cr, cg, cb] = view3(&c.weight, n);
+    let [cx, cy, cz] = view3(&c.wi, len);
+    let [cr, cg, cb] = view3(&c.weight, len);
     permute(
         kernels,
         rank,
-        &[cx, cy, cz, &c.pdf[..n], cr, cg, cb],
+        &[cx, cy, cz, &c.pdf[..len], cr, cg, cb],
         &mut [wx, wy, wz, &mut out.pdf[local.clone()], gr, gg, gb],
     );
     if let Some(v) = out.value.as_mut() {
-        permute(kernels, rank, &view3(&c.value, n), &mut rows_mut(v, &local));
+        permute(
+            kernels,
+            rank,
+            &view3(&c.value, len),
+            &mut rows_mut(v, &local),
+        );
     }
     if let Some(e) = out.eta.as_deref_mut() {
-        permute(kernels, rank, &[&c.eta[..n]], &mut [&mut e[local.clone()]]);
+        permute(
+            kernels,
+            rank,
+            &[&c.eta[..len]],
+            &mut [&mut e[local.clone()]],
+        );
     }
     if let Some(r) = out.roughness.as_deref_mut() {
         permute(
             kernels,
             rank,
-            &[&c.roughness[..n]],
+            &[&c.roughness[..len]],
             &mut [&mut r[local.clone()]],
         );
     }

@@ -691,9 +691,11 @@ fn choose_body<L: Lane>(
 }
 
 /// The lanes grouped by the lobe they chose (a counting sort over registers): lobe
-/// `k`'s lanes are rows `starts[k]..starts[k + 1]` of `order` (their lane indices,
-/// increasing, as floats), and lane `j` is row `rank[j]`. `chosen` holds lobe indices
-/// below `starts.len() - 1`, as floats.
+/// `k`'s lanes are the first rows of `starts[k]..starts[k + 1]` of `order` (their
+/// lane indices, increasing, as floats), each run padded to whole registers
+/// ([`LANE_MULTIPLE`]) with lane 0, and lane `j` is row `rank[j]`. `chosen` holds
+/// lobe indices below `starts.len() - 1`, as floats; `order` has room for
+/// `chosen.len()` plus `LANE_MULTIPLE` rows per lobe.
 #[inline(always)]
 fn sort_body<L: Lane>(chosen: &[f32], starts: &mut [usize], order: &mut [f32], rank: &mut [f32]) {
     let (len, count) = (chosen.len(), starts.len() - 1);
@@ -705,8 +707,9 @@ fn sort_body<L: Lane>(chosen: &[f32], starts: &mut [usize], order: &mut [f32], r
         }
     }
     for k in 0..count {
-        starts[k + 1] += starts[k];
+        starts[k + 1] = starts[k] + starts[k + 1].next_multiple_of(LANE_MULTIPLE);
     }
+    order[..starts[count]].fill(0.0);
     let mut next = [0usize; MAX_LOBES];
     next[..count].copy_from_slice(&starts[..count]);
     for i in (0..len).step_by(L::LANES) {
