@@ -1137,31 +1137,26 @@ fn mixture_in_place(
     }
     // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
     // their jobs would (`Directions::Sampled`).
-    let mut local_rows = [[0.0f32; MIXTURE_ROWS]; 6];
     let (wo_rows, wi_rows, directions) = match shared_frame(closure) {
         Some(frame) => {
-            let [a, b, c3, d, e, f] = &mut local_rows;
-            let mut wo_local = [&mut a[..len], &mut b[..len], &mut c3[..len]];
-            let mut wi_local = [&mut d[..len], &mut e[..len], &mut f[..len]];
             let unit = to_local(
                 kernels,
                 &frame,
                 Directions::Unit,
                 view3(&c.wo, len),
-                &mut wo_local,
+                &mut rows3(&mut c.wo_local, len),
             );
             let sampled = to_local(
                 kernels,
                 &frame,
                 Directions::Sampled,
                 view3(&s.wi, len),
-                &mut wi_local,
+                &mut rows3(&mut c.wi_local, len),
             );
             debug_assert!(unit && sampled, "only raw directions can be out of range");
-            let [a, b, c3, d, e, f] = &local_rows;
             (
-                [&a[..len], &b[..len], &c3[..len]],
-                [&d[..len], &e[..len], &f[..len]],
+                view3(&c.wo_local, len),
+                view3(&c.wi_local, len),
                 Directions::Local,
             )
         }

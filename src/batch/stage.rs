@@ -487,6 +487,9 @@ pub(super) struct Compact {
     pub rank: Vec<f32>,
     pub wo: [Vec<f32>; 3],
     pub u: [Vec<f32>; 3],
+    /// `wo` and the sampled `wi` in the frame the closure's lobes share.
+    pub wo_local: [Vec<f32>; 3],
+    pub wi_local: [Vec<f32>; 3],
     pub wi: [Vec<f32>; 3],
     pub weight: [Vec<f32>; 3],
     pub value: [Vec<f32>; 3],
@@ -506,6 +509,8 @@ impl Scratch {
             &mut self.sample_value,
             &mut self.compact.wo,
             &mut self.compact.u,
+            &mut self.compact.wo_local,
+            &mut self.compact.wi_local,
             &mut self.compact.wi,
             &mut self.compact.weight,
             &mut self.compact.value,
