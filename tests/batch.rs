@@ -70,6 +70,28 @@ fn closures(rng: &mut Rng) -> Vec<Closure> {
                 ),
             ],
         ),
+        // Four lobes, as the disney material's: in-place samples group each lobe's
+        // lanes into a run of their own.
+        (
+            Transport::Radiance,
+            vec![
+                (
+                    "disney_diffuse",
+                    Block::defaults(lobe("disney_diffuse")).float("roughness", 0.6),
+                ),
+                ("disney_sheen", Block::defaults(lobe("disney_sheen"))),
+                (
+                    "disney_specular",
+                    Block::defaults(lobe("disney_specular"))
+                        .float("roughness", 0.4)
+                        .float("anisotropic", 0.5),
+                ),
+                (
+                    "disney_clearcoat",
+                    Block::defaults(lobe("disney_clearcoat")),
+                ),
+            ],
+        ),
         (
             Transport::Radiance,
             vec![(

@@ -23,7 +23,7 @@ use crate::error::{Error, Status};
 use crate::kernels::expand::ExpandJob;
 use crate::kernels::material_rows::{self, ChooseJob, SelectJob};
 use crate::kernels::{
-    AlbedoJob, Directions, EvalJob, FinishJob, LobeLanes, SampleJob, finish_mixture,
+    AlbedoJob, Directions, EvalJob, FinishJob, FinishLobe, LobeLanes, SampleJob, finish_mixture,
 };
 use crate::lobes::LobeType;
 use crate::lobes::Transport;
@@ -849,7 +849,7 @@ fn sample_chunk(
     // `sample_pdf` holds `p_k pdf_k` now: the chosen slot's probability is 1 below.
     let first = lanes[0] as usize - base;
     if lanes[n - 1] as usize - lanes[0] as usize + 1 == n {
-        finish_in_place(kernels, s, slots.len(), first..first + n, out);
+        finish_in_place(kernels, s, first..first + n, out);
         if s.any_failed {
             for (&lane, _) in lanes.iter().zip(&s.failed).filter(|&(_, &f)| f != 0) {
                 out.write(lane as usize - base, &SampleResult::FAILED);
@@ -870,18 +870,12 @@ fn sample_chunk(
 
 /// The samples of a chunk of consecutive lanes finished in SIMD (`mixture::finish`)
 /// straight into the caller's rows `local`.
-fn finish_in_place(
-    kernels: Kernels,
-    s: &Scratch,
-    slots: usize,
-    local: Range<usize>,
-    out: &mut SampleOutput<'_>,
-) {
+fn finish_in_place(kernels: Kernels, s: &Scratch, local: Range<usize>, out: &mut SampleOutput<'_>) {
     let n = local.len();
     let mut job = FinishJob {
         len: n,
-        probabilities: &[1.0; MAX_SLOTS][..slots],
-        chosen: &s.chosen[..n],
+        lobe: FinishLobe::PerLane(&s.chosen[..n]),
+        probability: 1.0,
         wi: view3(&s.wi, n),
         own_value: view3(&s.sample_value, n),
         own_pdf: &s.sample_pdf[..n],

@@ -18,9 +18,12 @@ mod stage;
 
 use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
-use crate::kernels::{AlbedoJob, ClosureRows, Directions, EvalJob, LobeLanes, SampleJob, mixture};
 use crate::kernels::{
-    FinishJob, FinishOutput, choose_lobes, finish_mixture, normalize, to_local, unpack_events,
+    AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, mixture,
+};
+use crate::kernels::{
+    FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, normalize, permute,
+    sort_lanes, to_local, unpack_events,
 };
 use crate::lobes::Sample;
 use crate::math::{Frame, Rgb, Vec3};
@@ -377,7 +380,7 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     // In place needs no scratch buffers: a chunk takes them only to be staged. Its
     // directions in a frame all its lobes share go on the stack.
     let mut local = [[0.0f32; CHUNK]; 6];
-    in_chunks(start..end, |chunk| {
+    in_chunks(start..end, CHUNK, |chunk| {
         let (wo, range) = (input.wo, chunk.clone());
         if eval_in_place(kernels, closure, wo, wi, range, start, &mut local, out) {
             Ok(())
@@ -401,14 +404,24 @@ fn in_place<'a, C: ClosureSource<'a>>(input: &BatchInput<'a, C>) -> Option<&'a C
     (c.is_finished() && c.lobes().iter().all(|l| l.lobe.has_kernels())).then_some(c)
 }
 
-/// Run `chunk` on every chunk of `range`; every chunk runs, the first error wins.
+/// Lanes of a chunk of an in-place mixture sample: its many jobs (a sample, evals on
+/// the other lobes' runs and a finish per lobe) read their lobe's parameters once
+/// per job, and its rows stay in the L2 cache.
+const MIXTURE_CHUNK: usize = 1024;
+
+/// Rows of a mixture chunk sorted by lobe, each lobe's run in whole registers.
+const MIXTURE_ROWS: usize = MIXTURE_CHUNK + MAX_LOBES * LANE_MULTIPLE;
+
+/// Run `chunk` on every chunk of `size` lanes of `range`; every chunk runs, the
+/// first error wins.
 fn in_chunks(
     range: Range<usize>,
+    size: usize,
     mut chunk: impl FnMut(Range<usize>) -> Result<(), Error>,
 ) -> Result<(), Error> {
     let mut result = Ok(());
-    for lo in range.clone().step_by(CHUNK) {
-        let r = chunk(lo..(lo + CHUNK).min(range.end));
+    for lo in range.clone().step_by(size) {
+        let r = chunk(lo..(lo + size).min(range.end));
         if result.is_ok() {
             result = r;
         }
@@ -419,6 +432,21 @@ fn in_chunks(
 /// Lanes `lanes` of the caller's rows.
 fn rows<'r>(v: Soa3<'r>, lanes: &Range<usize>) -> [&'r [f32]; 3] {
     [v.x, v.y, v.z].map(|row| &row[lanes.clone()])
+}
+
+/// Lanes `run` of scratch rows.
+fn view_run<'r>(v: &'r [Vec<f32>; 3], run: &Range<usize>) -> [&'r [f32]; 3] {
+    [&v[0][run.clone()], &v[1][run.clone()], &v[2][run.clone()]]
+}
+
+/// Lanes `run` of mutable scratch rows.
+fn run_mut<'r>(v: &'r mut [Vec<f32>; 3], run: &Range<usize>) -> [&'r mut [f32]; 3] {
+    let [a, b, c] = v;
+    [
+        &mut a[run.clone()],
+        &mut b[run.clone()],
+        &mut c[run.clone()],
+    ]
 }
 
 /// Lanes `lanes` of mutable output rows.
@@ -569,9 +597,11 @@ fn eval_staged<'a, C: ClosureSource<'a>>(
     })
 }
 
-/// Accumulate every lobe of group `g`'s `closure` but `skip` at the staged `wo` and
-/// `wi`: the pdf into `s.pdf`, with `want_value` the value into `s.value`, with
-/// `want_reverse` the pdf of `wi` to `wo` into `s.pdf_reverse`.
+/// Accumulate every lobe of group `g`'s `closure` at the staged `wo` and `wi`, in
+/// lobe order: the pdf into `s.pdf`, with `want_value` the value into `s.value`, with
+/// `want_reverse` the pdf of `wi` to `wo` into `s.pdf_reverse`. Lobe `sampled`, whose
+/// sample gave `wi`, adds its own value and pdf (`s.sample_value`, `s.sample_pdf`)
+/// instead, as `Closure::sample` sums them.
 #[allow(clippy::too_many_arguments)]
 fn eval_lobes<'a, C: ClosureSource<'a>>(
     kernels: Kernels,
@@ -579,7 +609,7 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
     s: &mut Scratch,
     g: usize,
     closure: &Closure,
-    skip: Option<usize>,
+    sampled: Option<usize>,
     want_value: bool,
     want_reverse: bool,
 ) {
@@ -591,12 +621,24 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
         value,
         pdf,
         pdf_reverse,
+        sample_value,
+        sample_pdf,
         ..
     } = s;
     let group = &groups.groups()[g];
     let len = padded(group.lanes.len());
     for (k, l) in closure.lobes().iter().enumerate() {
-        if skip == Some(k) {
+        if sampled == Some(k) {
+            for (j, &lane) in group.lanes.iter().enumerate() {
+                let c = input
+                    .closures
+                    .closure(lane as usize)
+                    .expect("resolved before");
+                for (value, own) in value.iter_mut().zip(&*sample_value) {
+                    value[j] += own[j];
+                }
+                pdf[j] += c.lobes()[k].probability * sample_pdf[j];
+            }
             continue;
         }
         let lanes = lobe.lanes(input, group, k, len, false);
@@ -604,8 +646,8 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
         let mut job = EvalJob {
             len,
             mode: closure.transport(),
-            // With a sampled lobe to skip, `wi` is that sample's.
-            directions: if skip.is_some() {
+            // With a sampled lobe, `wi` is its sample's.
+            directions: if sampled.is_some() {
                 Directions::Sampled
             } else {
                 Directions::Unit
@@ -759,7 +801,7 @@ pub fn albedo<'a, C: ClosureSource<'a>>(
         let Some(closure) = in_place(input) else {
             return staged(start..end, &mut out);
         };
-        in_chunks(start..end, |chunk| {
+        in_chunks(start..end, CHUNK, |chunk| {
             if albedo_in_place(kernels, closure, input.wo, chunk.clone(), start, &mut out) {
                 Ok(())
             } else {
@@ -991,10 +1033,15 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     let Some(closure) = in_place(input).filter(|c| !c.lobes().is_empty()) else {
         return sample_staged(kernels, input, u, start..end, start, s, out);
     };
-    s.reserve_rows(padded(CHUNK))?;
     // One lobe, which every lane chooses: finished in the kernel.
     let one_lobe = closure.lobes().len() == 1 && closure.lobes()[0].probability == 1.0;
-    in_chunks(start..end, |chunk| {
+    let (size, rows) = if one_lobe {
+        (CHUNK, padded(CHUNK))
+    } else {
+        (MIXTURE_CHUNK, MIXTURE_ROWS)
+    };
+    s.reserve_rows(rows)?;
+    in_chunks(start..end, size, |chunk| {
         let done = if one_lobe {
             sample_in_place(kernels, closure, input.wo, u, chunk.clone(), start, s, out)
         } else {
@@ -1008,10 +1055,11 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     })
 }
 
-/// Sample lanes `lanes` of a shared closure of several lobes: lobe choice in the
-/// kernels, each lobe sampled for the lanes that chose it, the other lobes evaluated
-/// at the sampled directions, all on chunk-sized rows; then each lane finished into
-/// the caller's outputs. False as [`eval_in_place`].
+/// Sample lanes `lanes` of a shared closure of several lobes. The lanes are grouped
+/// by the lobe they chose (lobe choice in a kernel, then a counting sort) and their
+/// inputs gathered once in that order, so each lobe samples its own run of rows and
+/// is evaluated on the other lobes' runs, with no mask and no lane computed twice;
+/// the finish writes each lane back to the caller's order. False as [`eval_in_place`].
 #[allow(clippy::too_many_arguments)]
 fn mixture_in_place(
     kernels: Kernels,
@@ -1024,26 +1072,12 @@ fn mixture_in_place(
     out: &mut SampleOutput<'_>,
 ) -> bool {
     let n = lanes.len();
-    let len = padded(n);
-    // `wo` normalized once as staging does: the other lobes are evaluated at the
-    // sampled `wi` as it is returned, so their jobs take unit directions.
-    let mut wo_rows = rows3(&mut s.wo, len);
-    for ((row, src), pad) in wo_rows
-        .iter_mut()
-        .zip(rows(wo, &lanes))
-        .zip([0.0, 0.0, 1.0])
-    {
-        row[..n].copy_from_slice(src);
-        row[n..].fill(pad);
-    }
-    if normalize(kernels, &mut wo_rows, len) {
-        return false;
-    }
+    let count = closure.lobes().len();
     let mut probabilities = [0.0f32; MAX_LOBES];
     for (p, l) in probabilities.iter_mut().zip(closure.lobes()) {
         *p = l.probability;
     }
-    let probabilities = &probabilities[..closure.lobes().len()];
+    let probabilities = &probabilities[..count];
     let chosen = grow(&mut s.chosen, n);
     let [reused, ..] = rows3(&mut s.u, n);
     if !choose_lobes(
@@ -1055,55 +1089,58 @@ fn mixture_in_place(
     ) {
         return false;
     }
-    // Each lobe samples only the lanes that chose it, gathered and scattered back.
-    let (mut wi, mut own_value) = (rows3(&mut s.wi, n), rows3(&mut s.sample_value, n));
-    let (own_pdf, eta) = (grow(&mut s.sample_pdf, n), grow(&mut s.eta, n));
-    let (roughness, events) = (grow(&mut s.roughness, n), grow(&mut s.events, n));
-    let c = &mut s.compact;
-    // The lanes grouped by chosen lobe (a counting sort): lobe k's at `starts[k]..`.
-    let count = closure.lobes().len();
     let mut starts = [0usize; MAX_LOBES + 1];
-    for &k in &s.chosen[..n] {
-        starts[k as usize + 1] += 1;
-    }
-    for k in 0..count {
-        starts[k + 1] += starts[k];
-    }
-    let mut next = starts;
-    let order = grow(&mut c.index, n);
-    for (j, &k) in s.chosen[..n].iter().enumerate() {
-        order[next[k as usize]] = j as u32;
-        next[k as usize] += 1;
-    }
-    for (k, l) in closure.lobes().iter().enumerate() {
-        let index = &c.index[starts[k]..starts[k + 1]];
-        let m = index.len();
-        if m == 0 {
-            continue;
-        }
-        let inputs = view3(&s.wo, n).into_iter().chain([
+    let c = &mut s.compact;
+    let order = grow(&mut c.order, n + count * LANE_MULTIPLE);
+    let rank = grow(&mut c.rank, n);
+    sort_lanes(kernels, &s.chosen[..n], &mut starts[..=count], order, rank);
+    // Rows in that order: every run in whole registers, pads copying lane 0.
+    let len = starts[count];
+    // Inputs in that order, `wo` normalized as staging does (the other lobes are
+    // evaluated at the sampled `wi` as it is returned, so their jobs take unit
+    // directions).
+    let [wo_x, wo_y, wo_z] = rows(wo, &lanes);
+    let [c_wo, c_u] = [&mut c.wo, &mut c.u].map(|r| rows3(r, len));
+    let [a, b, c3] = c_wo;
+    let [d, e, f] = c_u;
+    permute(
+        kernels,
+        &c.order[..len],
+        &[
+            wo_x,
+            wo_y,
+            wo_z,
             &s.u[0][..n],
             &u.u0[lanes.clone()],
             &u.u1[lanes.clone()],
-        ]);
-        for (dst, src) in c.wo.iter_mut().chain(&mut c.u).zip(inputs) {
-            for (d, &j) in grow(dst, m).iter_mut().zip(index) {
-                *d = src[j as usize];
-            }
+        ],
+        &mut [a, b, c3, d, e, f],
+    );
+    if normalize(kernels, &mut rows3(&mut c.wo, len), len) {
+        return false;
+    }
+    // Each lobe samples its run.
+    let (mut wi, mut own_value) = (rows3(&mut s.wi, len), rows3(&mut s.sample_value, len));
+    let (own_pdf, eta) = (grow(&mut s.sample_pdf, len), grow(&mut s.eta, len));
+    let (roughness, events) = (grow(&mut s.roughness, len), grow(&mut s.events, len));
+    for (k, l) in closure.lobes().iter().enumerate() {
+        let run = starts[k]..starts[k + 1];
+        if run.is_empty() {
+            continue;
         }
         let mut job = SampleJob {
-            len: m,
+            len: run.len(),
             mode: closure.transport(),
             directions: Directions::Unit,
-            wo: view3(&c.wo, m),
-            u: view3(&c.u, m),
+            wo: view_run(&c.wo, &run),
+            u: view_run(&c.u, &run),
             lobe: uniform_lobe(closure, k),
-            wi: rows3(&mut c.wi, m),
-            value: rows3(&mut c.value, m),
-            pdf: grow(&mut c.pdf, m),
-            eta: grow(&mut c.eta, m),
-            roughness: grow(&mut c.roughness, m),
-            events: Some(grow(&mut c.events, m)),
+            wi: wi.each_mut().map(|row| &mut row[run.clone()]),
+            value: own_value.each_mut().map(|row| &mut row[run.clone()]),
+            pdf: &mut own_pdf[run.clone()],
+            eta: &mut eta[run.clone()],
+            roughness: &mut roughness[run.clone()],
+            events: Some(&mut events[run.clone()]),
             closure: None,
             only: None,
             out_of_range: false,
@@ -1112,100 +1149,180 @@ fn mixture_in_place(
         if job.out_of_range {
             return false;
         }
-        let rows = c.wi.iter().zip(wi.iter_mut());
-        for (src, dst) in rows.chain(c.value.iter().zip(own_value.iter_mut())) {
-            scatter_compact(index, src, dst);
-        }
-        scatter_compact(index, &c.pdf, own_pdf);
-        scatter_compact(index, &c.eta, eta);
-        scatter_compact(index, &c.roughness, roughness);
-        scatter_compact(index, &c.events, events);
-    }
-    // The mixture: the chosen lobe's own value and pdf, the other lobes' added.
-    rows3(&mut s.value, n);
-    grow(&mut s.pdf, n);
-    for j in 0..n {
-        let k = s.chosen[j] as usize;
-        for (value, own) in s.value.iter_mut().zip(&s.sample_value) {
-            value[j] = own[j];
-        }
-        s.pdf[j] = probabilities[k] * s.sample_pdf[j];
     }
     // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
-    // their jobs would (`Directions::Sampled`), into the compact rows (free now).
+    // their jobs would (`Directions::Sampled`).
     let (wo_rows, wi_rows, directions) = match shared_frame(closure) {
         Some(frame) => {
-            let c = &mut s.compact;
             let unit = to_local(
                 kernels,
                 &frame,
                 Directions::Unit,
-                view3(&s.wo, n),
-                &mut rows3(&mut c.wo, n),
+                view3(&c.wo, len),
+                &mut rows3(&mut c.wo_local, len),
             );
             let sampled = to_local(
                 kernels,
                 &frame,
                 Directions::Sampled,
-                view3(&s.wi, n),
-                &mut rows3(&mut c.wi, n),
+                view3(&s.wi, len),
+                &mut rows3(&mut c.wi_local, len),
             );
             debug_assert!(unit && sampled, "only raw directions can be out of range");
-            (&c.wo, &c.wi, Directions::Local)
+            (
+                view3(&c.wo_local, len),
+                view3(&c.wi_local, len),
+                Directions::Local,
+            )
         }
-        None => (&s.wo, &s.wi, Directions::Sampled),
+        None => (view3(&c.wo, len), view3(&s.wi, len), Directions::Sampled),
     };
+    // The mixture summed in lobe order, as `Closure::sample` sums it: each lobe
+    // evaluated on the other lobes' runs, its own run adding its sample.
+    for row in rows3(&mut s.value, len) {
+        row.fill(0.0);
+    }
+    grow(&mut s.pdf, len).fill(0.0);
     for (k, l) in closure.lobes().iter().enumerate() {
-        let [vr, vg, vb] = &mut s.value;
-        let mut job = EvalJob {
-            len: n,
-            mode: closure.transport(),
-            directions,
-            wo: view3(wo_rows, n),
-            wi: view3(wi_rows, n),
-            lobe: uniform_lobe(closure, k),
-            store: false,
-            value: Some([&mut vr[..n], &mut vg[..n], &mut vb[..n]]),
-            pdf: &mut s.pdf[..n],
-            except: Some((&s.chosen[..n], k as f32)),
-            out_of_range: false,
+        let own = starts[k]..starts[k + 1];
+        for run in [0..own.start, own.end..len] {
+            if run.is_empty() {
+                continue;
+            }
+            let mut job = EvalJob {
+                len: run.len(),
+                mode: closure.transport(),
+                directions,
+                wo: wo_rows.map(|row| &row[run.clone()]),
+                wi: wi_rows.map(|row| &row[run.clone()]),
+                lobe: uniform_lobe(closure, k),
+                store: false,
+                value: Some(run_mut(&mut s.value, &run)),
+                pdf: &mut s.pdf[run.clone()],
+                except: None,
+                out_of_range: false,
+            };
+            l.lobe.eval_lanes(kernels, &mut job);
+        }
+        for (v, own_v) in s.value.iter_mut().zip(&s.sample_value) {
+            for (v, &o) in v[own.clone()].iter_mut().zip(&own_v[own.clone()]) {
+                *v += o;
+            }
+        }
+        let p = probabilities[k];
+        for (q, &o) in s.pdf[own.clone()]
+            .iter_mut()
+            .zip(&s.sample_pdf[own.clone()])
+        {
+            *q += p * o;
+        }
+    }
+    // The closure's samples in sorted order, then gathered into the caller's.
+    let (want_value, want_eta) = (out.value.is_some(), out.eta.is_some());
+    let want_roughness = out.roughness.is_some();
+    for rows in [&mut c.wi, &mut c.weight, &mut c.value] {
+        rows3(rows, len);
+    }
+    for row in [&mut c.pdf, &mut c.eta, &mut c.roughness] {
+        grow(row, len);
+    }
+    for row in [&mut s.flags, &mut s.lobe_index, &mut s.component] {
+        grow(row, len);
+    }
+    for (k, &probability) in probabilities.iter().enumerate() {
+        let run = starts[k]..starts[k + 1];
+        if run.is_empty() {
+            continue;
+        }
+        let [wr, wg, wb] = &mut c.weight;
+        let [vr, vg, vb] = &mut c.value;
+        let mut job = FinishJob {
+            len: run.len(),
+            lobe: FinishLobe::One(k as u32),
+            probability,
+            wi: view_run(&s.wi, &run),
+            own_value: view_run(&s.sample_value, &run),
+            own_pdf: &s.sample_pdf[run.clone()],
+            events: &s.events[run.clone()],
+            eta: &s.eta[run.clone()],
+            roughness: &s.roughness[run.clone()],
+            value: view_run(&s.value, &run),
+            pdf: &s.pdf[run.clone()],
+            out: FinishOutput {
+                wi: run_mut(&mut c.wi, &run),
+                pdf: &mut c.pdf[run.clone()],
+                weight: [
+                    &mut wr[run.clone()],
+                    &mut wg[run.clone()],
+                    &mut wb[run.clone()],
+                ],
+                value: want_value.then(|| {
+                    [
+                        &mut vr[run.clone()],
+                        &mut vg[run.clone()],
+                        &mut vb[run.clone()],
+                    ]
+                }),
+                flags: out.flags.is_some().then(|| &mut s.flags[run.clone()]),
+                lobe: out.lobe.is_some().then(|| &mut s.lobe_index[run.clone()]),
+                component: out
+                    .component
+                    .is_some()
+                    .then(|| &mut s.component[run.clone()]),
+                eta: want_eta.then(|| &mut c.eta[run.clone()]),
+                roughness: want_roughness.then(|| &mut c.roughness[run.clone()]),
+            },
         };
-        l.lobe.eval_lanes(kernels, &mut job);
+        finish_mixture(kernels, &mut job);
     }
     let local = lanes.start - base..lanes.end - base;
-    let mut job = FinishJob {
-        len: n,
-        probabilities,
-        chosen: &s.chosen[..n],
-        wi: view3(&s.wi, n),
-        own_value: view3(&s.sample_value, n),
-        own_pdf: &s.sample_pdf[..n],
-        events: &s.events[..n],
-        eta: &s.eta[..n],
-        roughness: &s.roughness[..n],
-        value: view3(&s.value, n),
-        pdf: &s.pdf[..n],
-        out: FinishOutput {
-            wi: rows_mut(&mut out.wi, &local),
-            pdf: &mut out.pdf[local.clone()],
-            weight: rows_mut(&mut out.weight, &local),
-            value: out.value.as_mut().map(|v| rows_mut(v, &local)),
-            flags: out.flags.as_deref_mut().map(|f| &mut f[local.clone()]),
-            lobe: out.lobe.as_deref_mut().map(|l| &mut l[local.clone()]),
-            component: out.component.as_deref_mut().map(|k| &mut k[local.clone()]),
-            eta: out.eta.as_deref_mut().map(|e| &mut e[local.clone()]),
-            roughness: out.roughness.as_deref_mut().map(|r| &mut r[local.clone()]),
-        },
-    };
-    finish_mixture(kernels, &mut job);
-    true
-}
-
-/// `dst[index[i]] = src[i]`.
-fn scatter_compact<T: Copy>(index: &[u32], src: &[T], dst: &mut [T]) {
-    for (&j, &v) in index.iter().zip(src) {
-        dst[j as usize] = v;
+    let rank = &c.rank[..n];
+    let [wx, wy, wz] = rows_mut(&mut out.wi, &local);
+    let [gr, gg, gb] = rows_mut(&mut out.weight, &local);
+    let [cx, cy, cz] = view3(&c.wi, len);
+    let [cr, cg, cb] = view3(&c.weight, len);
+    permute(
+        kernels,
+        rank,
+        &[cx, cy, cz, &c.pdf[..len], cr, cg, cb],
+        &mut [wx, wy, wz, &mut out.pdf[local.clone()], gr, gg, gb],
+    );
+    if let Some(v) = out.value.as_mut() {
+        permute(
+            kernels,
+            rank,
+            &view3(&c.value, len),
+            &mut rows_mut(v, &local),
+        );
     }
+    if let Some(e) = out.eta.as_deref_mut() {
+        permute(
+            kernels,
+            rank,
+            &[&c.eta[..len]],
+            &mut [&mut e[local.clone()]],
+        );
+    }
+    if let Some(r) = out.roughness.as_deref_mut() {
+        permute(
+            kernels,
+            rank,
+            &[&c.roughness[..len]],
+            &mut [&mut r[local.clone()]],
+        );
+    }
+    for (src, dst) in [
+        (&s.flags, out.flags.as_deref_mut()),
+        (&s.lobe_index, out.lobe.as_deref_mut()),
+        (&s.component, out.component.as_deref_mut()),
+    ] {
+        if let Some(dst) = dst {
+            for (d, &r) in dst[local.clone()].iter_mut().zip(rank) {
+                *d = src[r as usize];
+            }
+        }
+    }
+    true
 }
 
 /// The closure's sample of scratch lane `j`, from the chosen lobe `k`'s sample rows
@@ -1353,19 +1470,7 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
         lobe.sample_lanes(kernels, &mut job);
         // The mixture at the sampled direction: the chosen lobe's own value and pdf
         // (exact at the returned `wi`), the other lobes evaluated there.
-        for (j, &lane) in group.lanes.iter().enumerate() {
-            let c = input
-                .closures
-                .closure(lane as usize)
-                .expect("resolved before");
-            for (value, own) in s.value.iter_mut().zip(&s.sample_value) {
-                value[j] = own[j];
-            }
-            s.pdf[j] = c.lobes()[k].probability * s.sample_pdf[j];
-        }
-        if closure.lobes().len() > 1 {
-            eval_lobes(kernels, input, s, g, closure, Some(k), true, false);
-        }
+        eval_lobes(kernels, input, s, g, closure, Some(k), true, false);
         let group = &s.groups.groups()[g];
         grow(&mut s.flags, len);
         grow(&mut s.lobe_index, len);

@@ -476,19 +476,26 @@ pub(super) struct Scratch {
     pub compact: Compact,
 }
 
-/// The lanes of an in-place mixture sample that chose one lobe, gathered so the
-/// lobe's kernel samples only them: their index in the chunk, inputs and outputs.
+/// An in-place mixture sample's chunk in the order of the lobes its lanes chose:
+/// the permutation both ways (float lane indices, for `kernels::permute`), the
+/// inputs gathered in that order and the closure's outputs before they go back.
 #[derive(Default)]
 pub(super) struct Compact {
-    pub index: Vec<u32>,
+    /// The chunk lane of each sorted row.
+    pub order: Vec<f32>,
+    /// The sorted row of each chunk lane.
+    pub rank: Vec<f32>,
     pub wo: [Vec<f32>; 3],
     pub u: [Vec<f32>; 3],
+    /// `wo` and the sampled `wi` in the frame the closure's lobes share.
+    pub wo_local: [Vec<f32>; 3],
+    pub wi_local: [Vec<f32>; 3],
     pub wi: [Vec<f32>; 3],
+    pub weight: [Vec<f32>; 3],
     pub value: [Vec<f32>; 3],
     pub pdf: Vec<f32>,
     pub eta: Vec<f32>,
     pub roughness: Vec<f32>,
-    pub events: Vec<f32>,
 }
 
 impl Scratch {
@@ -502,7 +509,10 @@ impl Scratch {
             &mut self.sample_value,
             &mut self.compact.wo,
             &mut self.compact.u,
+            &mut self.compact.wo_local,
+            &mut self.compact.wi_local,
             &mut self.compact.wi,
+            &mut self.compact.weight,
             &mut self.compact.value,
         ] {
             for row in rows {
@@ -516,14 +526,18 @@ impl Scratch {
             &mut self.roughness,
             &mut self.chosen,
             &mut self.events,
+            &mut self.compact.order,
+            &mut self.compact.rank,
             &mut self.compact.pdf,
             &mut self.compact.eta,
             &mut self.compact.roughness,
-            &mut self.compact.events,
         ] {
             reserve(row, len)?;
         }
-        reserve(&mut self.compact.index, len)
+        for row in [&mut self.flags, &mut self.lobe_index, &mut self.component] {
+            reserve(row, len)?;
+        }
+        Ok(())
     }
 
     /// Reserve every buffer a group of `len` lanes of `closure`'s shape needs, then

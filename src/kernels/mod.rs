@@ -16,6 +16,7 @@ pub mod material_rows;
 pub mod mixture;
 
 use crate::albedo_table::FRESNEL_CURVE_COS;
+use crate::closure::MAX_LOBES;
 use crate::fresnel;
 use crate::lobes::{Model, Params, Sample, ToWorld, Transport};
 use crate::math::lane::MAX_LANES;
@@ -207,15 +208,14 @@ pub struct AlbedoJob<'a> {
     pub out_of_range: bool,
 }
 
-/// The last step of a shared closure's mixture sample, over chunk rows: the chosen
-/// lobe's sample (`own`), the mixture's value and pdf at its direction, and the
-/// closure's outputs ([`mixture::finish`]).
+/// The last step of a shared closure's mixture sample, over the rows of the lanes
+/// that chose one lobe: that lobe's sample (`own`), the mixture's value and pdf at
+/// its direction, and the closure's outputs ([`mixture::finish`]).
 pub struct FinishJob<'a> {
     pub len: usize,
-    /// Selection probability of each lobe.
-    pub probabilities: &'a [f32],
-    /// Lobe index per lane (as floats).
-    pub chosen: &'a [f32],
+    /// The chosen lobe and its selection probability.
+    pub lobe: FinishLobe<'a>,
+    pub probability: f32,
     pub wi: [&'a [f32]; 3],
     pub own_value: [&'a [f32]; 3],
     pub own_pdf: &'a [f32],
@@ -227,7 +227,15 @@ pub struct FinishJob<'a> {
     pub out: FinishOutput<'a>,
 }
 
-/// The caller's sample outputs of a chunk; optional ones are skipped when `None`.
+/// The lobe index a finished sample reports: one for the whole job (a closure's run
+/// of lanes that chose it), or each lane's, as floats (a material batch's slots).
+#[derive(Clone, Copy)]
+pub enum FinishLobe<'a> {
+    One(u32),
+    PerLane(&'a [f32]),
+}
+
+/// A closure's sample outputs; optional ones are skipped when `None`.
 pub struct FinishOutput<'a> {
     pub wi: [&'a mut [f32]; 3],
     pub pdf: &'a mut [f32],
@@ -242,13 +250,9 @@ pub struct FinishOutput<'a> {
 
 #[inline(always)]
 fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
+    let probability = L::splat(job.probability);
     for i in (0..job.len).step_by(L::LANES) {
         let n = L::LANES.min(job.len - i);
-        let chosen = load::<L>(job.chosen, i, n, 0.0);
-        let mut probability = L::zero();
-        for (k, &p) in job.probabilities.iter().enumerate() {
-            probability = L::select(chosen.eq(L::splat(k as f32)), L::splat(p), probability);
-        }
         let (valid, transmitted, delta, class, component) =
             unpack_events(load::<L>(job.events, i, n, 0.0));
         let own_value = load_rgb::<L>(job.own_value, i, n);
@@ -298,12 +302,29 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
         if let Some(k) = out.component.as_deref_mut() {
             k[i..i + n].copy_from_slice(&mixture::components(&c)[..n]);
         }
-        let mut lanes = [0.0f32; MAX_LANES];
         if let Some(l) = out.lobe.as_deref_mut() {
-            L::select(c.ok, chosen, L::zero()).store(&mut lanes);
-            for (l, &k) in l[i..i + n].iter_mut().zip(&lanes) {
-                *l = k as u32;
+            let mut ok = [0.0f32; MAX_LANES];
+            L::select(c.ok, L::one(), L::zero()).store(&mut ok);
+            for (j, (l, &ok)) in l[i..i + n].iter_mut().zip(&ok).enumerate() {
+                let lobe = match job.lobe {
+                    FinishLobe::One(k) => k,
+                    FinishLobe::PerLane(chosen) => chosen[i + j] as u32,
+                };
+                *l = if ok != 0.0 { lobe } else { 0 };
             }
+        }
+    }
+}
+
+/// `dst[r][j] = src[r][index[j]]`: the lanes of each row `src[r]` in the order of
+/// `index` (lane indices as floats, each within `src[r]`).
+#[inline(always)]
+fn permute_body<L: Lane>(index: &[f32], src: &[&[f32]], dst: &mut [&mut [f32]]) {
+    for i in (0..index.len()).step_by(L::LANES) {
+        let n = L::LANES.min(index.len() - i);
+        let at = load::<L>(index, i, n, 0.0);
+        for (&s, d) in src.iter().zip(dst.iter_mut()) {
+            store(L::gather(s, at), d, i, n);
         }
     }
 }
@@ -682,6 +703,43 @@ fn choose_body<L: Lane>(
     true
 }
 
+/// The lanes grouped by the lobe they chose (a counting sort over registers): lobe
+/// `k`'s lanes are the first rows of `starts[k]..starts[k + 1]` of `order` (their
+/// lane indices, increasing, as floats), each run padded to whole registers
+/// ([`LANE_MULTIPLE`]) with lane 0, and lane `j` is row `rank[j]`. `chosen` holds
+/// lobe indices below `starts.len() - 1`, as floats; `order` has room for
+/// `chosen.len()` plus `LANE_MULTIPLE` rows per lobe.
+#[inline(always)]
+fn sort_body<L: Lane>(chosen: &[f32], starts: &mut [usize], order: &mut [f32], rank: &mut [f32]) {
+    let (len, count) = (chosen.len(), starts.len() - 1);
+    starts.fill(0);
+    for i in (0..len).step_by(L::LANES) {
+        let c = load::<L>(chosen, i, L::LANES.min(len - i), -1.0);
+        for k in 0..count {
+            starts[k + 1] += c.eq(L::splat(k as f32)).bits().count_ones() as usize;
+        }
+    }
+    for k in 0..count {
+        starts[k + 1] = starts[k] + starts[k + 1].next_multiple_of(LANE_MULTIPLE);
+    }
+    order[..starts[count]].fill(0.0);
+    let mut next = [0usize; MAX_LOBES];
+    next[..count].copy_from_slice(&starts[..count]);
+    for i in (0..len).step_by(L::LANES) {
+        let c = load::<L>(chosen, i, L::LANES.min(len - i), -1.0);
+        for (k, row) in next[..count].iter_mut().enumerate() {
+            let mut bits = c.eq(L::splat(k as f32)).bits();
+            while bits != 0 {
+                let j = i + bits.trailing_zeros() as usize;
+                order[*row] = j as f32;
+                rank[j] = *row as f32;
+                *row += 1;
+                bits &= bits - 1;
+            }
+        }
+    }
+}
+
 /// Values of a conductor's Fresnel curve at [`FRESNEL_CURVE_COS`].
 pub const CURVE_LEN: usize = FRESNEL_CURVE_COS.len();
 
@@ -710,6 +768,14 @@ kernel!(
 kernel!(
     /// Choose the lobe of each lane of a shared closure (`choose_body`).
     choose_lobes<>(probabilities: &[f32], u: &[f32], chosen: &mut [f32], reused: &mut [f32]) -> bool => choose_body
+);
+kernel!(
+    /// Group lanes by their chosen lobe (`sort_body`).
+    sort_lanes<>(chosen: &[f32], starts: &mut [usize], order: &mut [f32], rank: &mut [f32]) => sort_body
+);
+kernel!(
+    /// Gather rows into another lane order (`permute_body`).
+    permute<>(index: &[f32], src: &[&[f32]], dst: &mut [&mut [f32]]) => permute_body
 );
 kernel!(
     /// Finish a shared closure's mixture samples (`finish_body`).
