@@ -155,8 +155,8 @@ fn view(mu: f64, phi: f64) -> [f64; 3] {
     [s * phi.cos(), s * phi.sin(), mu]
 }
 
-/// The committed values of a table (16-bit codes, as the microfacet tables).
-fn decode(bytes: &[u8], len: usize, name: &str) -> Vec<f32> {
+/// The committed bytes of a table of `len` 16-bit codes, checked against its layout.
+fn checked<'a>(bytes: &'a [u8], len: usize, name: &str) -> &'a [u8] {
     assert_eq!(
         bytes.len(),
         2 * len,
@@ -164,8 +164,22 @@ fn decode(bytes: &[u8], len: usize, name: &str) -> Vec<f32> {
          GLINT_BLESS=disney cargo test --release --test albedo_tables"
     );
     bytes
+}
+
+/// The committed values of a table (16-bit codes, as the microfacet tables).
+fn decode(bytes: &[u8], len: usize, name: &str) -> Vec<f32> {
+    checked(bytes, len, name)
         .chunks_exact(2)
         .map(|b| super::generate::dequantize(u16::from_le_bytes([b[0], b[1]])))
+        .collect()
+}
+
+/// The committed codes of a two-channel table, kept as codes: each cell's pair in one
+/// little-endian `u32` (half the memory of decoded values, one gather per corner).
+fn code_pairs(bytes: &[u8], cells: usize, name: &str) -> Vec<u32> {
+    checked(bytes, 2 * cells, name)
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect()
 }
 
@@ -192,16 +206,18 @@ fn aspect_coordinate<L: Lane>(anisotropic: L) -> L {
     -(-(L::splat(0.9) * a)).ln_1p() * L::splat(std::f32::consts::LOG10_E)
 }
 
-/// The interpolated `(A, B)` over the corners `c` (cells of 2 values in `values`).
+/// The interpolated `(A, B)` over the corners `c` of a table of [`code_pairs`]: the
+/// codes are interpolated and scaled once (as [`super::generate::dequantize`]).
 #[inline(always)]
-fn sum_pairs<L: Lane, const C: usize>(values: &[f32], c: [(L, L); C]) -> (L, L) {
+fn sum_pairs<L: Lane, const C: usize>(pairs: &[u32], c: [(L, L); C]) -> (L, L) {
     let (mut a, mut b) = (L::zero(), L::zero());
     for (cell, w) in c {
-        let [va, vb] = L::gather_row::<2>(values, cell * L::splat(2.0));
-        a = w.mul_add(va, a);
-        b = w.mul_add(vb, b);
+        let (ca, cb) = L::gather_code_pair(pairs, cell);
+        a = w.mul_add(ca, a);
+        b = w.mul_add(cb, b);
     }
-    (a, b)
+    let scale = L::splat(1.0 / f32::from(u16::MAX));
+    (a * scale, b * scale)
 }
 
 /// The isotropic Disney specular's albedo table (module docs).
@@ -224,12 +240,12 @@ impl SpecularTable {
         generate(Self::CELLS, Self::cell)
     }
 
-    fn values() -> &'static [f32] {
-        static VALUES: OnceLock<Vec<f32>> = OnceLock::new();
-        VALUES.get_or_init(|| {
-            decode(
+    fn pairs() -> &'static [u32] {
+        static PAIRS: OnceLock<Vec<u32>> = OnceLock::new();
+        PAIRS.get_or_init(|| {
+            code_pairs(
                 include_bytes!("../../data/albedo/disney_specular.u16"),
-                Self::CELLS * Self::CHANNELS,
+                Self::CELLS,
                 Self::FILE,
             )
         })
@@ -242,11 +258,14 @@ impl SpecularTable {
     pub fn lookup<L: Lane>(wo: Vec3<L>, roughness: L, anisotropic: L) -> (L, L) {
         let m = grid(wo.z.clamp(L::zero(), L::one()).sqrt(), NM);
         let r = grid(roughness.max(L::zero()).sqrt(), NR);
+        let stretched = anisotropic.gt(L::zero());
+        if stretched.all() {
+            return SpecularAnisotropicTable::lookup(wo, m, r, anisotropic);
+        }
         let (a, b) = sum_pairs::<L, 4>(
-            Self::values(),
+            Self::pairs(),
             corners(L::zero(), [(m.0, m.1, 1), (r.0, r.1, NM)]),
         );
-        let stretched = anisotropic.gt(L::zero());
         if !stretched.any() {
             return (a, b);
         }
@@ -282,12 +301,12 @@ impl SpecularAnisotropicTable {
         generate(Self::CELLS, Self::cell)
     }
 
-    fn values() -> &'static [f32] {
-        static VALUES: OnceLock<Vec<f32>> = OnceLock::new();
-        VALUES.get_or_init(|| {
-            decode(
+    fn pairs() -> &'static [u32] {
+        static PAIRS: OnceLock<Vec<u32>> = OnceLock::new();
+        PAIRS.get_or_init(|| {
+            code_pairs(
                 include_bytes!("../../data/albedo/disney_specular_anisotropic.u16"),
-                Self::CELLS * Self::CHANNELS,
+                Self::CELLS,
                 Self::FILE,
             )
         })
@@ -302,7 +321,7 @@ impl SpecularAnisotropicTable {
         let (ip, fp) = grid(phi, NP);
         let (ia, fa) = grid(aspect_coordinate(anisotropic), NA);
         sum_pairs::<L, 16>(
-            Self::values(),
+            Self::pairs(),
             corners(
                 L::zero(),
                 [

@@ -105,6 +105,10 @@ pub trait Lane:
     fn frexp(self) -> (Self, Self);
     /// `table[index]` per lane; `index` holds integral values in `0..table.len()`.
     fn gather(table: &[f32], index: Self) -> Self;
+    /// The two 16-bit codes packed little-endian in `table[index]` (low, high), as
+    /// integral `f32`; `index` as for [`Lane::gather`]. One gather reads a pair of
+    /// fixed-point table channels (the Disney specular's `A` and `B`).
+    fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self);
     /// `table[index + k]` for `k` in `0..K`: each lane's row of `K` consecutive values
     /// (`index + K <= table.len()`). The scalar lane reads the row as one slice.
     #[inline(always)]
@@ -303,6 +307,11 @@ impl Lane for f32 {
     #[inline(always)]
     fn gather(table: &[f32], index: Self) -> Self {
         table[index as usize]
+    }
+    #[inline(always)]
+    fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {
+        let pair = table[index as usize];
+        ((pair & 0xffff) as f32, (pair >> 16) as f32)
     }
     #[inline(always)]
     fn gather_row<const K: usize>(table: &[f32], index: Self) -> [Self; K] {

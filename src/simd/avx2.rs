@@ -88,6 +88,16 @@ impl Mask for M32x8 {
 }
 
 impl F32x8 {
+    /// Integral lane values as indices into a table of `len` elements, clamped into it
+    /// so no gather can read outside it (NaN -> 0).
+    #[inline(always)]
+    fn table_index(self, len: usize) -> __m256i {
+        assert!(len > 0 && len <= i32::MAX as usize);
+        intrinsic!(_mm256_min_epi32(
+            _mm256_max_epi32(_mm256_cvttps_epi32(self.0), _mm256_setzero_si256()),
+            _mm256_set1_epi32(len as i32 - 1)
+        ))
+    }
     #[inline(always)]
     fn cmp<const OP: i32>(self, o: Self) -> M32x8 {
         M32x8(intrinsic!(_mm256_cmp_ps::<OP>(self.0, o.0)))
@@ -226,12 +236,18 @@ impl Lane for F32x8 {
     }
     #[inline(always)]
     fn gather(table: &[f32], index: Self) -> Self {
-        assert!(!table.is_empty() && table.len() <= i32::MAX as usize);
-        // Clamped into the table, so no lane can read outside it (NaN -> 0).
-        let index = intrinsic!(_mm256_min_epi32(
-            _mm256_max_epi32(_mm256_cvttps_epi32(index.0), _mm256_setzero_si256()),
-            _mm256_set1_epi32(table.len() as i32 - 1)
-        ));
+        let index = index.table_index(table.len());
         F32x8(intrinsic!(_mm256_i32gather_ps::<4>(table.as_ptr(), index)))
+    }
+    #[inline(always)]
+    fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {
+        let index = index.table_index(table.len());
+        let pair = intrinsic!(_mm256_i32gather_epi32::<4>(table.as_ptr().cast(), index));
+        let low = intrinsic!(_mm256_and_si256(pair, _mm256_set1_epi32(0xffff)));
+        let high = intrinsic!(_mm256_srli_epi32::<16>(pair));
+        (
+            F32x8(intrinsic!(_mm256_cvtepi32_ps(low))),
+            F32x8(intrinsic!(_mm256_cvtepi32_ps(high))),
+        )
     }
 }

@@ -36,6 +36,16 @@ binary_op!(Div div _mm512_div_ps);
 compound_assign!(F32x16);
 
 impl F32x16 {
+    /// Integral lane values as indices into a table of `len` elements, clamped into it
+    /// so no gather can read outside it (NaN -> 0).
+    #[inline(always)]
+    fn table_index(self, len: usize) -> __m512i {
+        assert!(len > 0 && len <= i32::MAX as usize);
+        intrinsic!(_mm512_min_epi32(
+            _mm512_max_epi32(_mm512_cvttps_epi32(self.0), _mm512_setzero_si512()),
+            _mm512_set1_epi32(len as i32 - 1)
+        ))
+    }
     #[inline(always)]
     fn bits(self) -> __m512i {
         intrinsic!(_mm512_castps_si512(self.0))
@@ -220,12 +230,18 @@ impl Lane for F32x16 {
     }
     #[inline(always)]
     fn gather(table: &[f32], index: Self) -> Self {
-        assert!(!table.is_empty() && table.len() <= i32::MAX as usize);
-        // Clamped into the table, so no lane can read outside it (NaN -> 0).
-        let index = intrinsic!(_mm512_min_epi32(
-            _mm512_max_epi32(_mm512_cvttps_epi32(index.0), _mm512_setzero_si512()),
-            _mm512_set1_epi32(table.len() as i32 - 1)
-        ));
+        let index = index.table_index(table.len());
         F32x16(intrinsic!(_mm512_i32gather_ps::<4>(index, table.as_ptr())))
+    }
+    #[inline(always)]
+    fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {
+        let index = index.table_index(table.len());
+        let pair = intrinsic!(_mm512_i32gather_epi32::<4>(index, table.as_ptr().cast()));
+        let low = intrinsic!(_mm512_and_si512(pair, _mm512_set1_epi32(0xffff)));
+        let high = intrinsic!(_mm512_srli_epi32::<16>(pair));
+        (
+            F32x16(intrinsic!(_mm512_cvtepi32_ps(low))),
+            F32x16(intrinsic!(_mm512_cvtepi32_ps(high))),
+        )
     }
 }
