@@ -767,11 +767,6 @@ fn sample_chunk(
             chosen: grow(&mut s.chosen, len),
         },
     );
-    let chosen = &s.chosen[..len];
-    let mut any = [false; MAX_SLOTS];
-    for &k in &chosen[..n] {
-        any[k as usize] = true;
-    }
     let Scratch {
         material: rows,
         wo,
@@ -787,10 +782,12 @@ fn sample_chunk(
         chosen,
         ..
     } = &mut *s;
+    let chosen = &chosen[..len];
+    // Each slot chosen by any lane samples every lane, keeping those that chose it.
     let [sv_r, sv_g, sv_b] = sample_value;
     let (sv_r, sv_g, sv_b) = (grow(sv_r, len), grow(sv_g, len), grow(sv_b, len));
     for (k, (_, lobe)) in slots.iter().enumerate() {
-        if !any[k] {
+        if !chosen[..n].contains(&(k as f32)) {
             continue;
         }
         let mut job = SampleJob {
@@ -807,44 +804,56 @@ fn sample_chunk(
             roughness: grow(roughness, len),
             events: Some(grow(events, len)),
             closure: None,
-            only: Some((&chosen[..len], k as f32)),
+            only: Some((chosen, k as f32)),
             out_of_range: false,
         };
         lobe.sample_lanes(kernels, &mut job);
     }
-    // The chosen slot's own value and `p_k` times its pdf, then the other slots'
-    // evals at the sampled direction.
-    for (v, sv) in rows3(value, len).into_iter().zip([&*sv_r, &*sv_g, &*sv_b]) {
-        v.copy_from_slice(&sv[..len]);
-    }
-    let pdf = grow(pdf, len);
     material_rows::chosen_pdf(
         kernels,
         &rows.probability[..slots.len() * len],
         slots.len(),
-        &chosen[..len],
+        chosen,
         &mut sample_pdf[..len],
-        pdf,
     );
+    // The mixture summed in slot order, as `Closure::sample` sums it: each slot
+    // evaluated on the lanes that chose another, then its own samples added.
+    let mut value = rows3(value, len);
+    for row in value.iter_mut() {
+        row.fill(0.0);
+    }
+    let pdf = grow(pdf, len);
+    pdf.fill(0.0);
     for (k, (_, lobe)) in slots.iter().enumerate() {
-        if !rows.live[k] || chosen[..n].iter().all(|&c| c as usize == k) {
-            continue;
+        let slot = k as f32;
+        if rows.live[k] && !chosen[..n].iter().all(|&c| c == slot) {
+            let [vr, vg, vb] = &mut value;
+            let mut job = EvalJob {
+                len,
+                mode: Transport::Radiance,
+                directions: Directions::Sampled,
+                wo: view3(wo, len),
+                wi: view3(wi, len),
+                lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
+                store: false,
+                value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
+                pdf: &mut pdf[..],
+                except: Some((chosen, slot)),
+                out_of_range: false,
+            };
+            lobe.eval_lanes(kernels, &mut job);
         }
-        let [vr, vg, vb] = &mut *value;
-        let mut job = EvalJob {
-            len,
-            mode: Transport::Radiance,
-            directions: Directions::Sampled,
-            wo: view3(wo, len),
-            wi: view3(wi, len),
-            lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-            store: false,
-            value: Some([&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
-            pdf: &mut pdf[..len],
-            except: Some((&chosen[..len], k as f32)),
-            out_of_range: false,
-        };
-        lobe.eval_lanes(kernels, &mut job);
+        if chosen[..n].contains(&slot) {
+            material_rows::add_own(
+                kernels,
+                slot,
+                chosen,
+                view3(sample_value, len),
+                &sample_pdf[..len],
+                &mut value,
+                pdf,
+            );
+        }
     }
     // `sample_pdf` holds `p_k pdf_k` now: the chosen slot's probability is 1 below.
     let first = lanes[0] as usize - base;

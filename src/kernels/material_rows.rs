@@ -226,15 +226,14 @@ fn choose_body<L: Lane>(job: &mut ChooseJob<'_>) {
     }
 }
 
-/// The chosen slot's selection probability times its own sample's pdf, into both
-/// `own_pdf` (in: the sample's pdf) and `pdf` (where the other slots' pdfs add).
+/// The chosen slot's selection probability times its own sample's pdf, in place in
+/// `own_pdf` (in: the sample's pdf).
 #[inline(always)]
 fn chosen_pdf_body<L: Lane>(
     probability: &[f32],
     count: usize,
     chosen: &[f32],
     own_pdf: &mut [f32],
-    pdf: &mut [f32],
 ) {
     let len = chosen.len();
     for i in (0..len).step_by(L::LANES) {
@@ -244,9 +243,34 @@ fn chosen_pdf_body<L: Lane>(
             let row = L::load(&probability[slot * len + i..]);
             p = L::select(k.eq(L::splat(slot as f32)), row, p);
         }
-        let v = p * L::load(&own_pdf[i..]);
-        v.store(&mut own_pdf[i..]);
-        v.store(&mut pdf[i..]);
+        (p * L::load(&own_pdf[i..])).store(&mut own_pdf[i..]);
+    }
+}
+
+/// Slot `slot`'s own sample added in the lanes that chose it: `value += own_value`,
+/// `pdf += own_pdf` (`p_k pdf_k`). Called after the slot's evals on the other lanes,
+/// slot by slot, so the mixture sums in slot order as `Closure::sample` sums it.
+#[inline(always)]
+fn add_own_body<L: Lane>(
+    slot: f32,
+    chosen: &[f32],
+    own_value: [&[f32]; 3],
+    own_pdf: &[f32],
+    value: &mut [&mut [f32]; 3],
+    pdf: &mut [f32],
+) {
+    let len = chosen.len();
+    for i in (0..len).step_by(L::LANES) {
+        let mine = L::load(&chosen[i..]).eq(L::splat(slot));
+        if !mine.any() {
+            continue;
+        }
+        for (row, own) in value.iter_mut().zip(own_value) {
+            let v = L::load(&row[i..]);
+            L::select(mine, v + L::load(&own[i..]), v).store(&mut row[i..]);
+        }
+        let q = L::load(&pdf[i..]);
+        L::select(mine, q + L::load(&own_pdf[i..]), q).store(&mut pdf[i..]);
     }
 }
 
@@ -268,5 +292,9 @@ kernel!(
 );
 kernel!(
     /// `p_k pdf_k` of each lane's chosen slot (`chosen_pdf_body`).
-    chosen_pdf<>(probability: &[f32], count: usize, chosen: &[f32], own_pdf: &mut [f32], pdf: &mut [f32]) => chosen_pdf_body
+    chosen_pdf<>(probability: &[f32], count: usize, chosen: &[f32], own_pdf: &mut [f32]) => chosen_pdf_body
+);
+kernel!(
+    /// One slot's own samples into the mixture (`add_own_body`).
+    add_own<>(slot: f32, chosen: &[f32], own_value: [&[f32]; 3], own_pdf: &[f32], value: &mut [&mut [f32]; 3], pdf: &mut [f32]) => add_own_body
 );
