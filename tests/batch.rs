@@ -92,6 +92,33 @@ fn closures(rng: &mut Rng) -> Vec<Closure> {
                 ),
             ],
         ),
+        // The other shapes the disney material emits (each fused in place).
+        (
+            Transport::Radiance,
+            vec![
+                ("disney_diffuse", Block::defaults(lobe("disney_diffuse"))),
+                ("disney_sheen", Block::defaults(lobe("disney_sheen"))),
+                ("disney_specular", Block::defaults(lobe("disney_specular"))),
+            ],
+        ),
+        (
+            Transport::Radiance,
+            vec![
+                ("disney_diffuse", Block::defaults(lobe("disney_diffuse"))),
+                ("disney_specular", Block::defaults(lobe("disney_specular"))),
+                (
+                    "disney_clearcoat",
+                    Block::defaults(lobe("disney_clearcoat")),
+                ),
+            ],
+        ),
+        (
+            Transport::Radiance,
+            vec![
+                ("disney_diffuse", Block::defaults(lobe("disney_diffuse"))),
+                ("disney_specular", Block::defaults(lobe("disney_specular"))),
+            ],
+        ),
         (
             Transport::Radiance,
             vec![(
@@ -222,6 +249,34 @@ fn run_with<'a>(
             pdf: &mut o.pdf,
             pdf_reverse: Some(&mut o.pdf_reverse),
         },
+    );
+    // Without the reverse pdf, a shared closure of a fused shape runs its single pass
+    // (kernels::fused): the same bits.
+    let mut forward = Outputs::filled(n, -7.0, 99);
+    let again = batch::eval(
+        exec,
+        &input,
+        soa(&l.wi),
+        EvalOutput {
+            value: soa_mut(&mut forward.value),
+            pdf: &mut forward.pdf,
+            pdf_reverse: None,
+        },
+    );
+    assert_eq!(
+        again.as_ref().err().map(|e| &e.message),
+        eval.as_ref().err().map(|e| &e.message)
+    );
+    let bits = |rows: &[&Vec<f32>]| -> Vec<u32> {
+        rows.iter()
+            .flat_map(|r| r.iter().map(|v| v.to_bits()))
+            .collect()
+    };
+    let [a, b, c] = &o.value;
+    let [d, e, f] = &forward.value;
+    assert!(
+        bits(&[a, b, c, &o.pdf]) == bits(&[d, e, f, &forward.pdf]),
+        "eval without the reverse pdf differs"
     );
     let pdf = batch::pdf(exec, &input, soa(&l.wi), &mut o.pdf_only);
     let albedo = batch::albedo(exec, &input, soa_mut(&mut o.albedo));

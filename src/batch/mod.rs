@@ -19,7 +19,8 @@ mod stage;
 use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
 use crate::kernels::{
-    AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, mixture,
+    AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, fused,
+    fused::FusedEvalJob, mixture,
 };
 use crate::kernels::{
     FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, normalize, permute,
@@ -497,9 +498,25 @@ fn eval_in_place(
         return true;
     }
     // Lobes that share one frame (a material's) take the directions into it once:
-    // normalized as `Directions::Raw` would, the same bits.
+    // normalized as `Directions::Raw` would, the same bits; a fused shape evaluates
+    // them all in one pass, with the same bits.
     let n = lanes.len();
-    let (wo, wi, directions) = if let Some(frame) = shared_frame(closure) {
+    let frame = shared_frame(closure);
+    if let (Some(frame), None) = (frame, out.pdf_reverse.as_ref())
+        && let Some((kernel, lobes)) = fused::for_closure(closure)
+    {
+        let mut job = FusedEvalJob {
+            mode: closure.transport(),
+            frame,
+            wo: rows(wo, &lanes),
+            wi: rows(wi, &lanes),
+            lobes,
+            value: out.value.as_mut().map(|v| rows_mut(v, &local)),
+            pdf: &mut out.pdf[local],
+        };
+        return kernel(kernels, &mut job);
+    }
+    let (wo, wi, directions) = if let Some(frame) = frame {
         let [a, b, c, d, e, f] = local_rows;
         let (mut wo_local, mut wi_local) = (
             [&mut a[..n], &mut b[..n], &mut c[..n]],

@@ -12,6 +12,7 @@
 //! mixture over lanes (lobe choice, the sample's weight and flags) is in [`mixture`].
 
 pub mod expand;
+pub mod fused;
 pub mod material_rows;
 pub mod mixture;
 

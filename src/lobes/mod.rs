@@ -475,6 +475,11 @@ pub trait LobeType: Send + Sync {
     fn has_kernels(&self) -> bool {
         false
     }
+    /// The built-in model behind this type, by which fused closure kernels
+    /// (`kernels::fused`) know it; None for plugin lobes.
+    fn model(&self) -> Option<std::any::TypeId> {
+        None
+    }
     /// `albedo` over a group of lanes; the default loops over [`LobeType::albedo_decoded`].
     fn albedo_lanes(&self, _kernels: Kernels, job: &mut AlbedoJob<'_>) {
         kernels::albedo_each_lane(job, |d, wo, mode| self.albedo_decoded(d, wo, mode));
@@ -605,6 +610,9 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn has_kernels(&self) -> bool {
         true
+    }
+    fn model(&self) -> Option<std::any::TypeId> {
+        Some(std::any::TypeId::of::<M>())
     }
     fn eval_lanes(&self, kernels: Kernels, job: &mut EvalJob<'_>) {
         kernels::eval::<M>(kernels, job);

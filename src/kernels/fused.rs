@@ -1,0 +1,211 @@
+//! Closures of built-in lobes evaluated in one pass. A batch over one shared closure
+//! whose lobes share a frame (a material's) otherwise takes the directions into the
+//! frame once and then runs each lobe's kernel over the chunk, each reading the local
+//! directions and adding into the outputs. When the closure's lobe types, in order,
+//! are one of the [`SHAPES`], one kernel instantiated for those models does it all per
+//! register: the directions are normalized and taken into the frame in registers,
+//! every lobe is evaluated on them (LLVM merges what the lobes compute alike, such as
+//! the half vector) and the sums are stored once. The arithmetic is the unfused
+//! path's, operation for operation, so the outputs are the same bits.
+
+use super::{Directions, MAX_LOBE_PARAMS, direction, store};
+use crate::closure::Closure;
+use crate::lobes::disney_clearcoat::DisneyClearcoat;
+use crate::lobes::disney_diffuse::DisneyDiffuse;
+use crate::lobes::disney_sheen::DisneySheen;
+use crate::lobes::disney_specular::DisneySpecular;
+use crate::lobes::{Model, Params, Transport};
+use crate::math::{Frame, Lane, LaneFrame, Rgb, Vec3};
+use crate::simd::{Kernels, kernel};
+use std::any::TypeId;
+
+/// Most lobes of a fused shape.
+const MAX_FUSED: usize = 4;
+
+/// One lobe of a fused job: its decoded block, weight and selection probability.
+#[derive(Clone, Copy)]
+pub struct FusedLobe<'a> {
+    pub params: &'a [f32],
+    pub weight: Rgb<f32>,
+    pub probability: f32,
+}
+
+/// A fused eval over the caller's raw direction rows (normalized as
+/// [`Directions::Raw`] normalizes them).
+pub struct FusedEvalJob<'a> {
+    pub mode: Transport,
+    pub frame: Frame,
+    pub wo: [&'a [f32]; 3],
+    pub wi: [&'a [f32]; 3],
+    /// The closure's lobes in order (the first `S::LOBES`).
+    pub lobes: [FusedLobe<'a>; MAX_FUSED],
+    /// `sum weight_k f_k cos` (when wanted) and `sum p_k pdf_k`, one per lane.
+    pub value: Option<[&'a mut [f32]; 3]>,
+    pub pdf: &'a mut [f32],
+}
+
+/// A tuple of lobe models evaluated together.
+pub trait Shape: 'static {
+    type Prepared<L: Lane>;
+    /// Whether `models` are this shape's models, in order.
+    fn matches(models: &[Option<TypeId>]) -> bool;
+    fn prepare<L: Lane>(lobes: &[FusedLobe<'_>; MAX_FUSED]) -> Self::Prepared<L>;
+    /// `(sum weight_k f_k, sum p_k pdf_k)` summed in lobe order, as lobe kernels add
+    /// into rows.
+    fn eval<L: Lane>(
+        p: &Self::Prepared<L>,
+        lobes: &[FusedLobe<'_>; MAX_FUSED],
+        wo: Vec3<L>,
+        wi: Vec3<L>,
+        mode: Transport,
+    ) -> (Rgb<L>, L);
+}
+
+/// `weight f` and `p pdf` of one lobe, as the eval kernel computes them.
+#[inline(always)]
+fn weighted<M: Model, L: Lane>(
+    p: &M::Prepared<L>,
+    lobe: &FusedLobe<'_>,
+    wo: Vec3<L>,
+    wi: Vec3<L>,
+    mode: Transport,
+) -> (Rgb<L>, L) {
+    let e = M::eval(p, wo, wi, mode);
+    let w = lobe.weight;
+    let weight = Rgb::new(L::splat(w.r), L::splat(w.g), L::splat(w.b));
+    (weight * e.value, L::splat(lobe.probability) * e.pdf)
+}
+
+macro_rules! shape {
+    ($first:ident $(, $m:ident)*) => {
+        impl<$first: Model $(, $m: Model)*> Shape for ($first, $($m,)*) {
+            type Prepared<L: Lane> = ($first::Prepared<L>, $($m::Prepared<L>,)*);
+            fn matches(models: &[Option<TypeId>]) -> bool {
+                let shape = [TypeId::of::<$first>() $(, TypeId::of::<$m>())*];
+                models.len() == shape.len()
+                    && models.iter().zip(shape).all(|(m, s)| *m == Some(s))
+            }
+            #[inline(always)]
+            fn prepare<L: Lane>(lobes: &[FusedLobe<'_>; MAX_FUSED]) -> Self::Prepared<L> {
+                let first = $first::prepare(Params::shared(lobes[0].params));
+                let mut k = 0;
+                (first, $({
+                    k += 1;
+                    $m::prepare(Params::shared(lobes[k].params))
+                },)*)
+            }
+            #[inline(always)]
+            #[allow(non_snake_case)]
+            fn eval<L: Lane>(
+                p: &Self::Prepared<L>,
+                lobes: &[FusedLobe<'_>; MAX_FUSED],
+                wo: Vec3<L>,
+                wi: Vec3<L>,
+                mode: Transport,
+            ) -> (Rgb<L>, L) {
+                let ($first, $($m,)*) = p;
+                let (mut value, mut pdf) = weighted::<$first, L>($first, &lobes[0], wo, wi, mode);
+                let mut k = 0;
+                $(
+                    k += 1;
+                    let (v, q) = weighted::<$m, L>($m, &lobes[k], wo, wi, mode);
+                    value = value + v;
+                    pdf += q;
+                )*
+                (value, pdf)
+            }
+        }
+    };
+}
+
+shape!(A, B);
+shape!(A, B, C);
+shape!(A, B, C, D);
+
+#[inline(always)]
+fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
+    let len = job.pdf.len();
+    let p = S::prepare::<L>(&job.lobes);
+    let frame = LaneFrame::<L>::splat(&job.frame);
+    let mut out_of_range = false;
+    for i in (0..len).step_by(L::LANES) {
+        let n = L::LANES.min(len - i);
+        let wo = direction(job.wo, i, n, Directions::Raw, &mut out_of_range);
+        let wi = direction(job.wi, i, n, Directions::Raw, &mut out_of_range);
+        if out_of_range {
+            return false;
+        }
+        let (value, pdf) = S::eval(
+            &p,
+            &job.lobes,
+            frame.to_local(wo),
+            frame.to_local(wi),
+            job.mode,
+        );
+        if let Some(rows) = &mut job.value {
+            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
+                store(v, row, i, n);
+            }
+        }
+        store(pdf, job.pdf, i, n);
+    }
+    true
+}
+
+kernel!(
+    /// A fused shape's eval over a job's lanes (`eval_body`); false when some
+    /// direction is outside [`Directions::Raw`]'s range (outputs incomplete).
+    eval<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_body
+);
+
+/// A fused eval kernel.
+pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
+/// [`Shape::matches`] of a shape.
+type Matches = fn(&[Option<TypeId>]) -> bool;
+
+/// The fused shapes: those the `disney` material emits (its specular always, the
+/// diffuse unless metallic 1, the sheen with the diffuse, the clearcoat unless 0).
+type Diffuse = DisneyDiffuse;
+type Sheen = DisneySheen;
+type Specular = DisneySpecular;
+type Clearcoat = DisneyClearcoat;
+type Every = (Diffuse, Sheen, Specular, Clearcoat);
+type NoClearcoat = (Diffuse, Sheen, Specular);
+type NoSheen = (Diffuse, Specular, Clearcoat);
+type Plastic = (Diffuse, Specular);
+type Metal = (Specular, Clearcoat);
+const SHAPES: [(Matches, FusedEval); 5] = [
+    (Every::matches, eval::<Every>),
+    (NoClearcoat::matches, eval::<NoClearcoat>),
+    (NoSheen::matches, eval::<NoSheen>),
+    (Plastic::matches, eval::<Plastic>),
+    (Metal::matches, eval::<Metal>),
+];
+
+/// The fused eval of `closure`'s shape and its job's lobes, when there is one.
+pub fn for_closure(closure: &Closure) -> Option<(FusedEval, [FusedLobe<'_>; MAX_FUSED])> {
+    let lobes = closure.lobes();
+    if lobes.len() < 2 || lobes.len() > MAX_FUSED {
+        return None;
+    }
+    let mut models = [None; MAX_FUSED];
+    for (m, l) in models.iter_mut().zip(lobes) {
+        *m = l.lobe.model();
+    }
+    let models = &models[..lobes.len()];
+    let (_, kernel) = SHAPES.iter().find(|(matches, _)| matches(models))?;
+    let mut out = [FusedLobe {
+        params: &[],
+        weight: Rgb::new(0.0, 0.0, 0.0),
+        probability: 0.0,
+    }; MAX_FUSED];
+    for (k, (o, l)) in out.iter_mut().zip(lobes).enumerate() {
+        debug_assert!(closure.lobe_decoded(k).len() <= MAX_LOBE_PARAMS);
+        *o = FusedLobe {
+            params: closure.lobe_decoded(k),
+            weight: l.weight,
+            probability: l.probability,
+        };
+    }
+    Some((*kernel, out))
+}
