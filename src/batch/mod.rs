@@ -20,7 +20,8 @@ use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
 use crate::kernels::{
     AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, fused,
-    fused::FusedEvalJob, mixture,
+    fused::{FusedEvalJob, FusedMixtureJob},
+    mixture,
 };
 use crate::kernels::{
     FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, normalize, permute,
@@ -503,18 +504,18 @@ fn eval_in_place(
     let n = lanes.len();
     let frame = shared_frame(closure);
     if let (Some(frame), None) = (frame, out.pdf_reverse.as_ref())
-        && let Some((kernel, lobes)) = fused::for_closure(closure)
+        && let Some(fused) = fused::for_closure(closure)
     {
         let mut job = FusedEvalJob {
             mode: closure.transport(),
             frame,
             wo: rows(wo, &lanes),
             wi: rows(wi, &lanes),
-            lobes,
+            lobes: fused.lobes,
             value: out.value.as_mut().map(|v| rows_mut(v, &local)),
             pdf: &mut out.pdf[local],
         };
-        return kernel(kernels, &mut job);
+        return (fused.eval)(kernels, &mut job);
     }
     let (wo, wi, directions) = if let Some(frame) = frame {
         let [a, b, c, d, e, f] = local_rows;
@@ -1167,73 +1168,27 @@ fn mixture_in_place(
             return false;
         }
     }
-    // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
-    // their jobs would (`Directions::Sampled`).
-    let (wo_rows, wi_rows, directions) = match shared_frame(closure) {
-        Some(frame) => {
-            let unit = to_local(
-                kernels,
-                &frame,
-                Directions::Unit,
-                view3(&c.wo, len),
-                &mut rows3(&mut c.wo_local, len),
-            );
-            let sampled = to_local(
-                kernels,
-                &frame,
-                Directions::Sampled,
-                view3(&s.wi, len),
-                &mut rows3(&mut c.wi_local, len),
-            );
-            debug_assert!(unit && sampled, "only raw directions can be out of range");
-            (
-                view3(&c.wo_local, len),
-                view3(&c.wi_local, len),
-                Directions::Local,
-            )
-        }
-        None => (view3(&c.wo, len), view3(&s.wi, len), Directions::Sampled),
-    };
-    // The mixture summed in lobe order, as `Closure::sample` sums it: each lobe
-    // evaluated on the other lobes' runs, its own run adding its sample.
-    for row in rows3(&mut s.value, len) {
-        row.fill(0.0);
+    let frame = shared_frame(closure);
+    if let Some(frame) = frame
+        && let Some(fused) = fused::for_closure(closure)
+    {
+        // A fused shape sums each row's mixture in one pass, the same bits.
+        let mut job = FusedMixtureJob {
+            mode: closure.transport(),
+            frame,
+            starts: &starts[..=count],
+            wo: view3(&c.wo, len),
+            wi: view3(&s.wi, len),
+            own_value: view3(&s.sample_value, len),
+            own_pdf: &s.sample_pdf[..len],
+            value: rows3(&mut s.value, len),
+            pdf: grow(&mut s.pdf, len),
+        };
+        (fused.mixture)(kernels, &mut job, &fused.lobes);
+    } else {
+        mixture_lobe_by_lobe(kernels, closure, frame, &starts[..=count], s);
     }
-    grow(&mut s.pdf, len).fill(0.0);
-    for (k, l) in closure.lobes().iter().enumerate() {
-        let own = starts[k]..starts[k + 1];
-        for run in [0..own.start, own.end..len] {
-            if run.is_empty() {
-                continue;
-            }
-            let mut job = EvalJob {
-                len: run.len(),
-                mode: closure.transport(),
-                directions,
-                wo: wo_rows.map(|row| &row[run.clone()]),
-                wi: wi_rows.map(|row| &row[run.clone()]),
-                lobe: uniform_lobe(closure, k),
-                store: false,
-                value: Some(run_mut(&mut s.value, &run)),
-                pdf: &mut s.pdf[run.clone()],
-                except: None,
-                out_of_range: false,
-            };
-            l.lobe.eval_lanes(kernels, &mut job);
-        }
-        for (v, own_v) in s.value.iter_mut().zip(&s.sample_value) {
-            for (v, &o) in v[own.clone()].iter_mut().zip(&own_v[own.clone()]) {
-                *v += o;
-            }
-        }
-        let p = probabilities[k];
-        for (q, &o) in s.pdf[own.clone()]
-            .iter_mut()
-            .zip(&s.sample_pdf[own.clone()])
-        {
-            *q += p * o;
-        }
-    }
+    let c = &mut s.compact;
     // The closure's samples in sorted order, then gathered into the caller's.
     let (want_value, want_eta) = (out.value.is_some(), out.eta.is_some());
     let want_roughness = out.roughness.is_some();
@@ -1340,6 +1295,87 @@ fn mixture_in_place(
         }
     }
     true
+}
+
+/// The mixture sums of a sorted sample chunk (`starts`: each lobe's run of rows in
+/// `s`), lobe by lobe: each lobe evaluated on the other lobes' runs, its own run
+/// adding its sample.
+fn mixture_lobe_by_lobe(
+    kernels: Kernels,
+    closure: &Closure,
+    frame: Option<Frame>,
+    starts: &[usize],
+    s: &mut Scratch,
+) {
+    let len = starts[starts.len() - 1];
+    let c = &mut s.compact;
+    // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
+    // their jobs would (`Directions::Sampled`).
+    let (wo_rows, wi_rows, directions) = match frame {
+        Some(frame) => {
+            let unit = to_local(
+                kernels,
+                &frame,
+                Directions::Unit,
+                view3(&c.wo, len),
+                &mut rows3(&mut c.wo_local, len),
+            );
+            let sampled = to_local(
+                kernels,
+                &frame,
+                Directions::Sampled,
+                view3(&s.wi, len),
+                &mut rows3(&mut c.wi_local, len),
+            );
+            debug_assert!(unit && sampled, "only raw directions can be out of range");
+            (
+                view3(&c.wo_local, len),
+                view3(&c.wi_local, len),
+                Directions::Local,
+            )
+        }
+        None => (view3(&c.wo, len), view3(&s.wi, len), Directions::Sampled),
+    };
+    // The mixture summed in lobe order, as `Closure::sample` sums it: each lobe
+    // evaluated on the other lobes' runs, its own run adding its sample.
+    for row in rows3(&mut s.value, len) {
+        row.fill(0.0);
+    }
+    grow(&mut s.pdf, len).fill(0.0);
+    for (k, l) in closure.lobes().iter().enumerate() {
+        let own = starts[k]..starts[k + 1];
+        for run in [0..own.start, own.end..len] {
+            if run.is_empty() {
+                continue;
+            }
+            let mut job = EvalJob {
+                len: run.len(),
+                mode: closure.transport(),
+                directions,
+                wo: wo_rows.map(|row| &row[run.clone()]),
+                wi: wi_rows.map(|row| &row[run.clone()]),
+                lobe: uniform_lobe(closure, k),
+                store: false,
+                value: Some(run_mut(&mut s.value, &run)),
+                pdf: &mut s.pdf[run.clone()],
+                except: None,
+                out_of_range: false,
+            };
+            l.lobe.eval_lanes(kernels, &mut job);
+        }
+        for (v, own_v) in s.value.iter_mut().zip(&s.sample_value) {
+            for (v, &o) in v[own.clone()].iter_mut().zip(&own_v[own.clone()]) {
+                *v += o;
+            }
+        }
+        let p = l.probability;
+        for (q, &o) in s.pdf[own.clone()]
+            .iter_mut()
+            .zip(&s.sample_pdf[own.clone()])
+        {
+            *q += p * o;
+        }
+    }
 }
 
 /// The closure's sample of scratch lane `j`, from the chosen lobe `k`'s sample rows

@@ -59,6 +59,20 @@ pub trait Shape: 'static {
         wi: Vec3<L>,
         mode: Transport,
     ) -> (Rgb<L>, L);
+    /// The mixture at a sample of lobe `own` (`own_value`, `own_pdf`: its weighted
+    /// value and `p pdf`), the other lobes evaluated there: summed from zero in lobe
+    /// order, as a mixture sample's rows are.
+    #[allow(clippy::too_many_arguments)]
+    fn mixture<L: Lane>(
+        p: &Self::Prepared<L>,
+        lobes: &[FusedLobe<'_>; MAX_FUSED],
+        own: usize,
+        own_value: Rgb<L>,
+        own_pdf: L,
+        wo: Vec3<L>,
+        wi: Vec3<L>,
+        mode: Transport,
+    ) -> (Rgb<L>, L);
 }
 
 /// `weight f` and `p pdf` of one lobe, as the eval kernel computes them.
@@ -114,6 +128,40 @@ macro_rules! shape {
                 )*
                 (value, pdf)
             }
+            #[inline(always)]
+            #[allow(non_snake_case)]
+            fn mixture<L: Lane>(
+                p: &Self::Prepared<L>,
+                lobes: &[FusedLobe<'_>; MAX_FUSED],
+                own: usize,
+                own_value: Rgb<L>,
+                own_pdf: L,
+                wo: Vec3<L>,
+                wi: Vec3<L>,
+                mode: Transport,
+            ) -> (Rgb<L>, L) {
+                let ($first, $($m,)*) = p;
+                let (mut value, mut pdf) = (Rgb::zero(), L::zero());
+                let (v, q) = if own == 0 {
+                    (own_value, own_pdf)
+                } else {
+                    weighted::<$first, L>($first, &lobes[0], wo, wi, mode)
+                };
+                value = value + v;
+                pdf += q;
+                let mut k = 0;
+                $(
+                    k += 1;
+                    let (v, q) = if own == k {
+                        (own_value, own_pdf)
+                    } else {
+                        weighted::<$m, L>($m, &lobes[k], wo, wi, mode)
+                    };
+                    value = value + v;
+                    pdf += q;
+                )*
+                (value, pdf)
+            }
         }
     };
 }
@@ -152,14 +200,75 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
     true
 }
 
+/// A mixture sample's sums over a chunk sorted by chosen lobe: lobe `k`'s samples
+/// in rows `starts[k]..starts[k + 1]` (whole registers).
+pub struct FusedMixtureJob<'a> {
+    pub mode: Transport,
+    pub frame: Frame,
+    pub starts: &'a [usize],
+    /// Unit `wo` and the sampled `wi` (normalized once more, as an eval given it back
+    /// would: [`Directions::Sampled`]), world space.
+    pub wo: [&'a [f32]; 3],
+    pub wi: [&'a [f32]; 3],
+    /// Each row's own sample: weighted value and pdf (not yet times `p`).
+    pub own_value: [&'a [f32]; 3],
+    pub own_pdf: &'a [f32],
+    /// The mixture's value and `sum p_k pdf_k`.
+    pub value: [&'a mut [f32]; 3],
+    pub pdf: &'a mut [f32],
+}
+
+#[inline(always)]
+fn mixture_body<S: Shape, L: Lane>(
+    job: &mut FusedMixtureJob<'_>,
+    lobes: &[FusedLobe<'_>; MAX_FUSED],
+) {
+    let p = S::prepare::<L>(lobes);
+    let frame = LaneFrame::<L>::splat(&job.frame);
+    let mut unused = false;
+    for (own, run) in job.starts.windows(2).enumerate() {
+        let probability = L::splat(lobes[own].probability);
+        for i in (run[0]..run[1]).step_by(L::LANES) {
+            let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
+            let wi = direction(job.wi, i, L::LANES, Directions::Sampled, &mut unused);
+            let own_value = Rgb::new(
+                L::load(&job.own_value[0][i..]),
+                L::load(&job.own_value[1][i..]),
+                L::load(&job.own_value[2][i..]),
+            );
+            let own_pdf = probability * L::load(&job.own_pdf[i..]);
+            let (value, pdf) = S::mixture(
+                &p,
+                lobes,
+                own,
+                own_value,
+                own_pdf,
+                frame.to_local(wo),
+                frame.to_local(wi),
+                job.mode,
+            );
+            for (v, row) in value.to_array().into_iter().zip(job.value.iter_mut()) {
+                v.store(&mut row[i..]);
+            }
+            pdf.store(&mut job.pdf[i..]);
+        }
+    }
+}
+
 kernel!(
     /// A fused shape's eval over a job's lanes (`eval_body`); false when some
     /// direction is outside [`Directions::Raw`]'s range (outputs incomplete).
     eval<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_body
 );
+kernel!(
+    /// A fused shape's mixture sums over a sorted sample chunk (`mixture_body`).
+    mixture<S: Shape>(job: &mut FusedMixtureJob<'_>, lobes: &[FusedLobe<'_>; MAX_FUSED]) => mixture_body
+);
 
 /// A fused eval kernel.
 pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
+/// A fused mixture kernel.
+pub type FusedMixture = fn(Kernels, &mut FusedMixtureJob<'_>, &[FusedLobe<'_>; MAX_FUSED]);
 /// [`Shape::matches`] of a shape.
 type Matches = fn(&[Option<TypeId>]) -> bool;
 
@@ -174,16 +283,27 @@ type NoClearcoat = (Diffuse, Sheen, Specular);
 type NoSheen = (Diffuse, Specular, Clearcoat);
 type Plastic = (Diffuse, Specular);
 type Metal = (Specular, Clearcoat);
-const SHAPES: [(Matches, FusedEval); 5] = [
-    (Every::matches, eval::<Every>),
-    (NoClearcoat::matches, eval::<NoClearcoat>),
-    (NoSheen::matches, eval::<NoSheen>),
-    (Plastic::matches, eval::<Plastic>),
-    (Metal::matches, eval::<Metal>),
+const SHAPES: [(Matches, FusedEval, FusedMixture); 5] = [
+    (Every::matches, eval::<Every>, mixture::<Every>),
+    (
+        NoClearcoat::matches,
+        eval::<NoClearcoat>,
+        mixture::<NoClearcoat>,
+    ),
+    (NoSheen::matches, eval::<NoSheen>, mixture::<NoSheen>),
+    (Plastic::matches, eval::<Plastic>, mixture::<Plastic>),
+    (Metal::matches, eval::<Metal>, mixture::<Metal>),
 ];
 
-/// The fused eval of `closure`'s shape and its job's lobes, when there is one.
-pub fn for_closure(closure: &Closure) -> Option<(FusedEval, [FusedLobe<'_>; MAX_FUSED])> {
+/// The fused kernels of a closure's shape, and its lobes as their jobs take them.
+pub struct Fused<'a> {
+    pub eval: FusedEval,
+    pub mixture: FusedMixture,
+    pub lobes: [FusedLobe<'a>; MAX_FUSED],
+}
+
+/// The fused kernels of `closure`'s shape, when there are.
+pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
     let lobes = closure.lobes();
     if lobes.len() < 2 || lobes.len() > MAX_FUSED {
         return None;
@@ -193,7 +313,7 @@ pub fn for_closure(closure: &Closure) -> Option<(FusedEval, [FusedLobe<'_>; MAX_
         *m = l.lobe.model();
     }
     let models = &models[..lobes.len()];
-    let (_, kernel) = SHAPES.iter().find(|(matches, _)| matches(models))?;
+    let &(_, eval, mixture) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
     let mut out = [FusedLobe {
         params: &[],
         weight: Rgb::new(0.0, 0.0, 0.0),
@@ -207,5 +327,9 @@ pub fn for_closure(closure: &Closure) -> Option<(FusedEval, [FusedLobe<'_>; MAX_
             probability: l.probability,
         };
     }
-    Some((*kernel, out))
+    Some(Fused {
+        eval,
+        mixture,
+        lobes: out,
+    })
 }
