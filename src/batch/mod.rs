@@ -24,10 +24,11 @@ use crate::kernels::{
     mixture,
 };
 use crate::kernels::{
-    FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, normalize, permute,
-    sort_lanes, to_local, unpack_events,
+    FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, lobe_runs, normalize,
+    sort_rows, to_local, unpack_events, unsort_rows,
 };
 use crate::lobes::Sample;
+use crate::math::lane::MAX_LANES;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::simd::Kernels;
 use stage::{Randoms, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch};
@@ -411,8 +412,9 @@ fn in_place<'a, C: ClosureSource<'a>>(input: &BatchInput<'a, C>) -> Option<&'a C
 /// per job, and its rows stay in the L2 cache.
 const MIXTURE_CHUNK: usize = 1024;
 
-/// Rows of a mixture chunk sorted by lobe, each lobe's run in whole registers.
-const MIXTURE_ROWS: usize = MIXTURE_CHUNK + MAX_LOBES * LANE_MULTIPLE;
+/// Rows of a mixture chunk sorted by lobe, each lobe's run in whole registers, and
+/// one register past the last run (`kernels::sort_rows` stores whole registers).
+const MIXTURE_ROWS: usize = MIXTURE_CHUNK + MAX_LOBES * LANE_MULTIPLE + MAX_LANES;
 
 /// Run `chunk` on every chunk of `size` lanes of `range`; every chunk runs, the
 /// first error wins.
@@ -1074,8 +1076,8 @@ fn sample_block<'a, C: ClosureSource<'a>>(
 }
 
 /// Sample lanes `lanes` of a shared closure of several lobes. The lanes are grouped
-/// by the lobe they chose (lobe choice in a kernel, then a counting sort) and their
-/// inputs gathered once in that order, so each lobe samples its own run of rows and
+/// by the lobe they chose (lobe choice in a kernel, runs counted, then each lobe's
+/// lanes packed into its run by `compress`) and their inputs moved once in that order, so each lobe samples its own run of rows and
 /// is evaluated on the other lobes' runs, with no mask and no lane computed twice;
 /// the finish writes each lane back to the caller's order. False as [`eval_in_place`].
 #[allow(clippy::too_many_arguments)]
@@ -1108,22 +1110,22 @@ fn mixture_in_place(
         return false;
     }
     let mut starts = [0usize; MAX_LOBES + 1];
-    let c = &mut s.compact;
-    let order = grow(&mut c.order, n + count * LANE_MULTIPLE);
-    let rank = grow(&mut c.rank, n);
-    sort_lanes(kernels, &s.chosen[..n], &mut starts[..=count], order, rank);
-    // Rows in that order: every run in whole registers, pads copying lane 0.
+    lobe_runs(kernels, &s.chosen[..n], &mut starts[..=count]);
+    // Rows in lobe order: every run in whole registers, its pads copying its first
+    // lane; sorted rows have room for a whole register past the last run.
     let len = starts[count];
+    let c = &mut s.compact;
     // Inputs in that order, `wo` normalized as staging does (the other lobes are
     // evaluated at the sampled `wi` as it is returned, so their jobs take unit
     // directions).
     let [wo_x, wo_y, wo_z] = rows(wo, &lanes);
-    let [c_wo, c_u] = [&mut c.wo, &mut c.u].map(|r| rows3(r, len));
+    let [c_wo, c_u] = [&mut c.wo, &mut c.u].map(|r| rows3(r, len + MAX_LANES));
     let [a, b, c3] = c_wo;
     let [d, e, f] = c_u;
-    permute(
+    sort_rows(
         kernels,
-        &c.order[..len],
+        &s.chosen[..n],
+        &starts[..=count],
         &[
             wo_x,
             wo_y,
@@ -1193,10 +1195,10 @@ fn mixture_in_place(
     let (want_value, want_eta) = (out.value.is_some(), out.eta.is_some());
     let want_roughness = out.roughness.is_some();
     for rows in [&mut c.wi, &mut c.weight, &mut c.value] {
-        rows3(rows, len);
+        rows3(rows, len + MAX_LANES);
     }
     for row in [&mut c.pdf, &mut c.eta, &mut c.roughness] {
-        grow(row, len);
+        grow(row, len + MAX_LANES);
     }
     for row in [&mut s.flags, &mut s.lobe_index, &mut s.component] {
         grow(row, len);
@@ -1248,40 +1250,31 @@ fn mixture_in_place(
         finish_mixture(kernels, &mut job);
     }
     let local = lanes.start - base..lanes.end - base;
-    let rank = &c.rank[..n];
+    let (chosen, starts) = (&s.chosen[..n], &starts[..=count]);
+    let sorted = len + MAX_LANES;
     let [wx, wy, wz] = rows_mut(&mut out.wi, &local);
     let [gr, gg, gb] = rows_mut(&mut out.weight, &local);
-    let [cx, cy, cz] = view3(&c.wi, len);
-    let [cr, cg, cb] = view3(&c.weight, len);
-    permute(
+    let [cx, cy, cz] = view3(&c.wi, sorted);
+    let [cr, cg, cb] = view3(&c.weight, sorted);
+    unsort_rows(
         kernels,
-        rank,
-        &[cx, cy, cz, &c.pdf[..len], cr, cg, cb],
+        chosen,
+        starts,
+        &[cx, cy, cz, &c.pdf[..sorted], cr, cg, cb],
         &mut [wx, wy, wz, &mut out.pdf[local.clone()], gr, gg, gb],
     );
     if let Some(v) = out.value.as_mut() {
-        permute(
-            kernels,
-            rank,
-            &view3(&c.value, len),
-            &mut rows_mut(v, &local),
-        );
+        let src = view3(&c.value, sorted);
+        unsort_rows(kernels, chosen, starts, &src, &mut rows_mut(v, &local));
     }
-    if let Some(e) = out.eta.as_deref_mut() {
-        permute(
-            kernels,
-            rank,
-            &[&c.eta[..len]],
-            &mut [&mut e[local.clone()]],
-        );
-    }
-    if let Some(r) = out.roughness.as_deref_mut() {
-        permute(
-            kernels,
-            rank,
-            &[&c.roughness[..len]],
-            &mut [&mut r[local.clone()]],
-        );
+    for (src, dst) in [
+        (&c.eta, out.eta.as_deref_mut()),
+        (&c.roughness, out.roughness.as_deref_mut()),
+    ] {
+        if let Some(dst) = dst {
+            let dst = &mut dst[local.clone()];
+            unsort_rows(kernels, chosen, starts, &[&src[..sorted]], &mut [dst]);
+        }
     }
     for (src, dst) in [
         (&s.flags, out.flags.as_deref_mut()),
@@ -1289,8 +1282,13 @@ fn mixture_in_place(
         (&s.component, out.component.as_deref_mut()),
     ] {
         if let Some(dst) = dst {
-            for (d, &r) in dst[local.clone()].iter_mut().zip(rank) {
-                *d = src[r as usize];
+            // Each lane takes the next row of its lobe's run, as `unsort_rows` does.
+            let mut next = [0usize; MAX_LOBES];
+            next[..count].copy_from_slice(&starts[..count]);
+            for (d, &k) in dst[local.clone()].iter_mut().zip(chosen) {
+                let at = &mut next[k as usize];
+                *d = src[*at];
+                *at += 1;
             }
         }
     }

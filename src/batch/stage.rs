@@ -476,15 +476,11 @@ pub(super) struct Scratch {
     pub compact: Compact,
 }
 
-/// An in-place mixture sample's chunk in the order of the lobes its lanes chose:
-/// the permutation both ways (float lane indices, for `kernels::permute`), the
-/// inputs gathered in that order and the closure's outputs before they go back.
+/// An in-place mixture sample's chunk in the order of the lobes its lanes chose
+/// (`kernels::sort_rows`): the inputs in that order and the closure's outputs before
+/// they go back (`kernels::unsort_rows`).
 #[derive(Default)]
 pub(super) struct Compact {
-    /// The chunk lane of each sorted row.
-    pub order: Vec<f32>,
-    /// The sorted row of each chunk lane.
-    pub rank: Vec<f32>,
     pub wo: [Vec<f32>; 3],
     pub u: [Vec<f32>; 3],
     /// `wo` and the sampled `wi` in the frame the closure's lobes share.
@@ -526,8 +522,6 @@ impl Scratch {
             &mut self.roughness,
             &mut self.chosen,
             &mut self.events,
-            &mut self.compact.order,
-            &mut self.compact.rank,
             &mut self.compact.pdf,
             &mut self.compact.eta,
             &mut self.compact.roughness,

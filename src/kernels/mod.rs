@@ -317,19 +317,6 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
     }
 }
 
-/// `dst[r][j] = src[r][index[j]]`: the lanes of each row `src[r]` in the order of
-/// `index` (lane indices as floats, each within `src[r]`).
-#[inline(always)]
-fn permute_body<L: Lane>(index: &[f32], src: &[&[f32]], dst: &mut [&mut [f32]]) {
-    for i in (0..index.len()).step_by(L::LANES) {
-        let n = L::LANES.min(index.len() - i);
-        let at = load::<L>(index, i, n, 0.0);
-        for (&s, d) in src.iter().zip(dst.iter_mut()) {
-            store(L::gather(s, at), d, i, n);
-        }
-    }
-}
-
 /// Whether the `EVENT_*` bit `bit` is set in the events `e` (small integers held
 /// exactly in floats): `floor(e / bit)` is odd.
 #[inline(always)]
@@ -704,14 +691,12 @@ fn choose_body<L: Lane>(
     true
 }
 
-/// The lanes grouped by the lobe they chose (a counting sort over registers): lobe
-/// `k`'s lanes are the first rows of `starts[k]..starts[k + 1]` of `order` (their
-/// lane indices, increasing, as floats), each run padded to whole registers
-/// ([`LANE_MULTIPLE`]) with lane 0, and lane `j` is row `rank[j]`. `chosen` holds
-/// lobe indices below `starts.len() - 1`, as floats; `order` has room for
-/// `chosen.len()` plus `LANE_MULTIPLE` rows per lobe.
+/// How many lanes chose each lobe, as runs: lobe `k`'s lanes will be rows
+/// `starts[k]..starts[k + 1]` of sorted rows ([`sort_rows`]), each run padded to whole
+/// registers ([`LANE_MULTIPLE`]). `chosen` holds lobe indices below `starts.len() - 1`,
+/// as floats.
 #[inline(always)]
-fn sort_body<L: Lane>(chosen: &[f32], starts: &mut [usize], order: &mut [f32], rank: &mut [f32]) {
+fn runs_body<L: Lane>(chosen: &[f32], starts: &mut [usize]) {
     let (len, count) = (chosen.len(), starts.len() - 1);
     starts.fill(0);
     for i in (0..len).step_by(L::LANES) {
@@ -723,20 +708,76 @@ fn sort_body<L: Lane>(chosen: &[f32], starts: &mut [usize], order: &mut [f32], r
     for k in 0..count {
         starts[k + 1] = starts[k] + starts[k + 1].next_multiple_of(LANE_MULTIPLE);
     }
-    order[..starts[count]].fill(0.0);
-    let mut next = [0usize; MAX_LOBES];
-    next[..count].copy_from_slice(&starts[..count]);
-    for i in (0..len).step_by(L::LANES) {
-        let c = load::<L>(chosen, i, L::LANES.min(len - i), -1.0);
-        for (k, row) in next[..count].iter_mut().enumerate() {
-            let mut bits = c.eq(L::splat(k as f32)).bits();
-            while bits != 0 {
-                let j = i + bits.trailing_zeros() as usize;
-                order[*row] = j as f32;
-                rank[j] = *row as f32;
-                *row += 1;
-                bits &= bits - 1;
+}
+
+/// The rows `src` (one value per lane of `chosen`) in lobe order: each lobe's lanes,
+/// in lane order, packed into its run of `starts` ([`runs_body`]) by `compress`, the
+/// run's padding repeating its first lane. `dst` rows hold `starts[last]` rows plus
+/// [`MAX_LANES`] (whole registers are stored; each run's overflow is overwritten by
+/// the next run).
+#[inline(always)]
+fn sort_rows_body<L: Lane>(
+    chosen: &[f32],
+    starts: &[usize],
+    src: &[&[f32]],
+    dst: &mut [&mut [f32]],
+) {
+    let len = chosen.len();
+    for (k, run) in starts.windows(2).enumerate() {
+        let (start, end) = (run[0], run[1]);
+        if start == end {
+            continue;
+        }
+        let mut at = start;
+        for i in (0..len).step_by(L::LANES) {
+            let n = L::LANES.min(len - i);
+            let mask = load::<L>(chosen, i, n, -1.0).eq(L::splat(k as f32));
+            let m = mask.bits().count_ones() as usize;
+            if m == 0 {
+                continue;
             }
+            for (s, d) in src.iter().zip(dst.iter_mut()) {
+                load::<L>(s, i, n, 0.0).compress(mask).store(&mut d[at..]);
+            }
+            at += m;
+        }
+        for d in dst.iter_mut() {
+            let first = d[start];
+            d[at..end].fill(first);
+        }
+    }
+}
+
+/// The inverse of [`sort_rows_body`]: each lane of `chosen` takes its row of the
+/// sorted `src` (rows of `starts[last]` plus [`MAX_LANES`] values) into `dst`.
+#[inline(always)]
+fn unsort_rows_body<L: Lane>(
+    chosen: &[f32],
+    starts: &[usize],
+    src: &[&[f32]],
+    dst: &mut [&mut [f32]],
+) {
+    let (len, count) = (chosen.len(), starts.len() - 1);
+    let mut at = [0usize; MAX_LOBES];
+    at[..count].copy_from_slice(&starts[..count]);
+    let mut masks = [L::Mask::splat(false); MAX_LOBES];
+    for i in (0..len).step_by(L::LANES) {
+        let n = L::LANES.min(len - i);
+        let c = load::<L>(chosen, i, n, -1.0);
+        for (k, mask) in masks[..count].iter_mut().enumerate() {
+            *mask = c.eq(L::splat(k as f32));
+        }
+        for (s, d) in src.iter().zip(dst.iter_mut()) {
+            let mut v = L::zero();
+            for (&mask, &at) in masks[..count].iter().zip(&at) {
+                if mask.any() {
+                    v = L::select(mask, L::load(&s[at..]).expand(mask), v);
+                }
+            }
+            store(v, d, i, n);
+        }
+        for (at, mask) in at.iter_mut().zip(&masks[..count]) {
+            *at += mask.bits().count_ones() as usize;
         }
     }
 }
@@ -771,12 +812,16 @@ kernel!(
     choose_lobes<>(probabilities: &[f32], u: &[f32], chosen: &mut [f32], reused: &mut [f32]) -> bool => choose_body
 );
 kernel!(
-    /// Group lanes by their chosen lobe (`sort_body`).
-    sort_lanes<>(chosen: &[f32], starts: &mut [usize], order: &mut [f32], rank: &mut [f32]) => sort_body
+    /// Runs of lanes by chosen lobe (`runs_body`).
+    lobe_runs<>(chosen: &[f32], starts: &mut [usize]) => runs_body
 );
 kernel!(
-    /// Gather rows into another lane order (`permute_body`).
-    permute<>(index: &[f32], src: &[&[f32]], dst: &mut [&mut [f32]]) => permute_body
+    /// Rows into lobe order (`sort_rows_body`).
+    sort_rows<>(chosen: &[f32], starts: &[usize], src: &[&[f32]], dst: &mut [&mut [f32]]) => sort_rows_body
+);
+kernel!(
+    /// Rows from lobe order back into lane order (`unsort_rows_body`).
+    unsort_rows<>(chosen: &[f32], starts: &[usize], src: &[&[f32]], dst: &mut [&mut [f32]]) => unsort_rows_body
 );
 kernel!(
     /// Finish a shared closure's mixture samples (`finish_body`).

@@ -105,6 +105,12 @@ pub trait Lane:
     fn frexp(self) -> (Self, Self);
     /// `table[index]` per lane; `index` holds integral values in `0..table.len()`.
     fn gather(table: &[f32], index: Self) -> Self;
+    /// The lanes where `mask` is set, in lane order, moved to the front; the other
+    /// lanes are unspecified.
+    fn compress(self, mask: Self::Mask) -> Self;
+    /// The inverse of [`Lane::compress`]: the first `mask.bits().count_ones()` lanes, in
+    /// order, moved to the lanes where `mask` is set; the other lanes zero.
+    fn expand(self, mask: Self::Mask) -> Self;
     /// The two 16-bit codes packed little-endian in `table[index]` (low, high), as
     /// integral `f32`; `index` as for [`Lane::gather`]. One gather reads a pair of
     /// fixed-point table channels (the Disney specular's `A` and `B`).
@@ -307,6 +313,14 @@ impl Lane for f32 {
     #[inline(always)]
     fn gather(table: &[f32], index: Self) -> Self {
         table[index as usize]
+    }
+    #[inline(always)]
+    fn compress(self, _mask: bool) -> Self {
+        self
+    }
+    #[inline(always)]
+    fn expand(self, mask: bool) -> Self {
+        if mask { self } else { 0.0 }
     }
     #[inline(always)]
     fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {

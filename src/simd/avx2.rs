@@ -87,6 +87,33 @@ impl Mask for M32x8 {
     }
 }
 
+/// `_mm256_permutevar8x32_ps` indices for `compress` under each 8-bit mask: the set
+/// lanes in order, then lane 0.
+static COMPRESS: [[i32; 8]; 256] = permutations(false);
+/// ... and for `expand`: each set lane takes the next lane from the front.
+static EXPAND: [[i32; 8]; 256] = permutations(true);
+
+const fn permutations(expand: bool) -> [[i32; 8]; 256] {
+    let mut table = [[0; 8]; 256];
+    let mut mask = 0;
+    while mask < 256 {
+        let (mut lane, mut next) = (0, 0);
+        while lane < 8 {
+            if mask >> lane & 1 == 1 {
+                if expand {
+                    table[mask][lane] = next;
+                } else {
+                    table[mask][next as usize] = lane as i32;
+                }
+                next += 1;
+            }
+            lane += 1;
+        }
+        mask += 1;
+    }
+    table
+}
+
 impl F32x8 {
     /// Integral lane values as indices into a table of `len` elements, clamped into it
     /// so no gather can read outside it (NaN -> 0).
@@ -238,6 +265,19 @@ impl Lane for F32x8 {
     fn gather(table: &[f32], index: Self) -> Self {
         let index = index.table_index(table.len());
         F32x8(intrinsic!(_mm256_i32gather_ps::<4>(table.as_ptr(), index)))
+    }
+    #[inline(always)]
+    fn compress(self, mask: M32x8) -> Self {
+        let index = &COMPRESS[mask.bits() as usize];
+        let index = intrinsic!(_mm256_loadu_si256(index.as_ptr().cast()));
+        F32x8(intrinsic!(_mm256_permutevar8x32_ps(self.0, index)))
+    }
+    #[inline(always)]
+    fn expand(self, mask: M32x8) -> Self {
+        let index = &EXPAND[mask.bits() as usize];
+        let index = intrinsic!(_mm256_loadu_si256(index.as_ptr().cast()));
+        let spread = F32x8(intrinsic!(_mm256_permutevar8x32_ps(self.0, index)));
+        Self::select(mask, spread, Self::zero())
     }
     #[inline(always)]
     fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {

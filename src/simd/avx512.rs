@@ -234,6 +234,14 @@ impl Lane for F32x16 {
         F32x16(intrinsic!(_mm512_i32gather_ps::<4>(index, table.as_ptr())))
     }
     #[inline(always)]
+    fn compress(self, mask: M16) -> Self {
+        F32x16(intrinsic!(_mm512_maskz_compress_ps(mask.0, self.0)))
+    }
+    #[inline(always)]
+    fn expand(self, mask: M16) -> Self {
+        F32x16(intrinsic!(_mm512_maskz_expand_ps(mask.0, self.0)))
+    }
+    #[inline(always)]
     fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {
         let index = index.table_index(table.len());
         let pair = intrinsic!(_mm512_i32gather_epi32::<4>(index, table.as_ptr().cast()));
