@@ -966,3 +966,46 @@ pub fn albedo_each_lane(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simd::Kernels;
+
+    /// `compress` then `expand` under every mask of one register of lane values
+    /// `1..=LANES`: the set lanes packed to the front in order, then back in place
+    /// with zeros elsewhere. Returns the first failing mask.
+    #[inline(always)]
+    fn compress_expand_body<L: Lane>() -> Option<u32> {
+        let values: [f32; MAX_LANES] = std::array::from_fn(|j| (j + 1) as f32);
+        let v = L::load(&values);
+        for mask in 0..1u32 << L::LANES {
+            let flags: [f32; MAX_LANES] = std::array::from_fn(|j| (mask >> j & 1) as f32);
+            let m = L::load(&flags).eq(L::one());
+            let (mut packed, mut spread) = ([0.0; MAX_LANES], [0.0; MAX_LANES]);
+            v.compress(m).store(&mut packed);
+            v.compress(m).expand(m).store(&mut spread);
+            let set: Vec<f32> = (0..L::LANES)
+                .filter(|j| mask >> j & 1 == 1)
+                .map(|j| values[j])
+                .collect();
+            let in_place = (0..L::LANES).all(|j| spread[j] == flags[j] * values[j]);
+            if packed[..set.len()] != set[..] || !in_place {
+                return Some(mask);
+            }
+        }
+        None
+    }
+
+    kernel!(
+        /// `compress_expand_body` on a kernel set.
+        compress_expand<>() -> Option<u32> => compress_expand_body
+    );
+
+    #[test]
+    fn compress_and_expand_invert_each_other_under_every_mask() {
+        for kernels in Kernels::available() {
+            assert_eq!(compress_expand(kernels), None, "{:?}", kernels.isa());
+        }
+    }
+}
