@@ -24,8 +24,8 @@ use crate::kernels::{
     mixture,
 };
 use crate::kernels::{
-    FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, lobe_runs, normalize,
-    sort_rows, to_local, unpack_events, unsort_rows,
+    FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, normalize, sort_rows,
+    to_local, unpack_events, unsort_rows,
 };
 use crate::lobes::Sample;
 use crate::math::lane::MAX_LANES;
@@ -1100,17 +1100,17 @@ fn mixture_in_place(
     let probabilities = &probabilities[..count];
     let chosen = grow(&mut s.chosen, n);
     let [reused, ..] = rows3(&mut s.u, n);
+    let mut starts = [0usize; MAX_LOBES + 1];
     if !choose_lobes(
         kernels,
         probabilities,
         &u.u_lobe[lanes.clone()],
         chosen,
         reused,
+        &mut starts[..=count],
     ) {
         return false;
     }
-    let mut starts = [0usize; MAX_LOBES + 1];
-    lobe_runs(kernels, &s.chosen[..n], &mut starts[..=count]);
     // Rows in lobe order: every run in whole registers, its pads copying its first
     // lane; sorted rows have room for a whole register past the last run.
     let len = starts[count];

@@ -668,14 +668,20 @@ fn to_local_body<L: Lane>(
 
 /// The lobe each lane's `u` chooses among `probabilities` ([`mixture::choose`]), as
 /// an index in `chosen`, and `u` rescaled for it in `reused`; false when some `u` is
-/// not finite or no lobe can be chosen (the outputs are then incomplete).
+/// not finite or no lobe can be chosen (the outputs are then incomplete). `starts`
+/// (one more than `probabilities`) gets the runs the lanes make in lobe order: lobe
+/// `k`'s lanes will be rows `starts[k]..starts[k + 1]` of sorted rows ([`sort_rows`]),
+/// each run padded to whole registers ([`LANE_MULTIPLE`]).
 #[inline(always)]
 fn choose_body<L: Lane>(
     probabilities: &[f32],
     u: &[f32],
     chosen: &mut [f32],
     reused: &mut [f32],
+    starts: &mut [usize],
 ) -> bool {
+    let count = probabilities.len();
+    starts.fill(0);
     for i in (0..u.len()).step_by(L::LANES) {
         let n = L::LANES.min(u.len() - i);
         let x = load::<L>(u, i, n, 0.5);
@@ -687,31 +693,19 @@ fn choose_body<L: Lane>(
         }
         store(k, chosen, i, n);
         store(r, reused, i, n);
-    }
-    true
-}
-
-/// How many lanes chose each lobe, as runs: lobe `k`'s lanes will be rows
-/// `starts[k]..starts[k + 1]` of sorted rows ([`sort_rows`]), each run padded to whole
-/// registers ([`LANE_MULTIPLE`]). `chosen` holds lobe indices below `starts.len() - 1`,
-/// as floats.
-#[inline(always)]
-fn runs_body<L: Lane>(chosen: &[f32], starts: &mut [usize]) {
-    let (len, count) = (chosen.len(), starts.len() - 1);
-    starts.fill(0);
-    for i in (0..len).step_by(L::LANES) {
-        let c = load::<L>(chosen, i, L::LANES.min(len - i), -1.0);
-        for k in 0..count {
-            starts[k + 1] += c.eq(L::splat(k as f32)).bits().count_ones() as usize;
+        let real = u32::MAX >> (32 - n);
+        for (j, start) in starts[1..=count].iter_mut().enumerate() {
+            *start += (k.eq(L::splat(j as f32)).bits() & real).count_ones() as usize;
         }
     }
     for k in 0..count {
         starts[k + 1] = starts[k] + starts[k + 1].next_multiple_of(LANE_MULTIPLE);
     }
+    true
 }
 
 /// The rows `src` (one value per lane of `chosen`) in lobe order: each lobe's lanes,
-/// in lane order, packed into its run of `starts` ([`runs_body`]) by `compress`, the
+/// in lane order, packed into its run of `starts` ([`choose_body`]) by `compress`, the
 /// run's padding repeating its first lane. `dst` rows hold `starts[last]` rows plus
 /// [`MAX_LANES`] (whole registers are stored; each run's overflow is overwritten by
 /// the next run).
@@ -809,11 +803,7 @@ kernel!(
 );
 kernel!(
     /// Choose the lobe of each lane of a shared closure (`choose_body`).
-    choose_lobes<>(probabilities: &[f32], u: &[f32], chosen: &mut [f32], reused: &mut [f32]) -> bool => choose_body
-);
-kernel!(
-    /// Runs of lanes by chosen lobe (`runs_body`).
-    lobe_runs<>(chosen: &[f32], starts: &mut [usize]) => runs_body
+    choose_lobes<>(probabilities: &[f32], u: &[f32], chosen: &mut [f32], reused: &mut [f32], starts: &mut [usize]) -> bool => choose_body
 );
 kernel!(
     /// Rows into lobe order (`sort_rows_body`).
