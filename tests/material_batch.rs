@@ -30,6 +30,19 @@ fn normals_and_views(rng: &mut Rng, n: usize) -> (Vec<Vec3<f32>>, Vec<Vec3<f32>>
     (normal, wo)
 }
 
+/// Random tangents, every `every`-th lane (from lane 0) left to the library (all zero).
+fn tangents(rng: &mut Rng, n: usize, every: usize) -> Vec<Vec3<f32>> {
+    (0..n)
+        .map(|i| {
+            if i % every == 0 {
+                Vec3::new(0.0, 0.0, 0.0)
+            } else {
+                sphere(rng)
+            }
+        })
+        .collect()
+}
+
 fn rows(v: &[Vec3<f32>]) -> [Vec<f32>; 3] {
     [
         v.iter().map(|d| d.x).collect(),
@@ -147,16 +160,8 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     let mut rng = Rng::new(0xfa11);
     let (normal, wo) = normals_and_views(&mut rng, n);
     let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
-    // Every third lane leaves the tangent to the library (all zero).
-    let tangent: Vec<Vec3<f32>> = (0..n)
-        .map(|i| {
-            if i % 3 == 0 {
-                Vec3::new(0.0, 0.0, 0.0)
-            } else {
-                sphere(&mut rng)
-            }
-        })
-        .collect();
+    // Every third lane leaves the tangent to the library.
+    let tangent = tangents(&mut rng, n, 3);
     let mut rough: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
     let mut color = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
     let (wo, wi, mut normal, mut tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
@@ -288,15 +293,7 @@ fn matches_closures(
     };
     let mut rng = Rng::new(seed);
     let (normal, wo) = normals_and_views(&mut rng, n);
-    let tangent: Vec<Vec3<f32>> = (0..n)
-        .map(|i| {
-            if i % 2 == 0 {
-                Vec3::new(0.0, 0.0, 0.0)
-            } else {
-                sphere(&mut rng)
-            }
-        })
-        .collect();
+    let tangent = tangents(&mut rng, n, 2);
     let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
     let (wo, wi, normal, tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
     let params = params(&mut rng);

@@ -783,11 +783,16 @@ fn sample_chunk(
         ..
     } = &mut *s;
     let chosen = &chosen[..len];
+    // How many lanes chose each slot.
+    let mut picks = [0usize; MAX_SLOTS];
+    for &k in &chosen[..n] {
+        picks[k as usize] += 1;
+    }
     // Each slot chosen by any lane samples every lane, keeping those that chose it.
     let [sv_r, sv_g, sv_b] = sample_value;
     let (sv_r, sv_g, sv_b) = (grow(sv_r, len), grow(sv_g, len), grow(sv_b, len));
     for (k, (_, lobe)) in slots.iter().enumerate() {
-        if !chosen[..n].contains(&(k as f32)) {
+        if picks[k] == 0 {
             continue;
         }
         let mut job = SampleJob {
@@ -826,7 +831,7 @@ fn sample_chunk(
     pdf.fill(0.0);
     for (k, (_, lobe)) in slots.iter().enumerate() {
         let slot = k as f32;
-        if rows.live[k] && !chosen[..n].iter().all(|&c| c == slot) {
+        if rows.live[k] && picks[k] < n {
             let [vr, vg, vb] = &mut value;
             let mut job = EvalJob {
                 len,
@@ -843,7 +848,7 @@ fn sample_chunk(
             };
             lobe.eval_lanes(kernels, &mut job);
         }
-        if chosen[..n].contains(&slot) {
+        if picks[k] > 0 {
             material_rows::add_own(
                 kernels,
                 slot,

@@ -1178,6 +1178,7 @@ fn mixture_in_place(
         let mut job = FusedMixtureJob {
             mode: closure.transport(),
             frame,
+            lobes: fused.lobes,
             starts: &starts[..=count],
             wo: view3(&c.wo, len),
             wi: view3(&s.wi, len),
@@ -1186,7 +1187,7 @@ fn mixture_in_place(
             value: rows3(&mut s.value, len),
             pdf: grow(&mut s.pdf, len),
         };
-        (fused.mixture)(kernels, &mut job, &fused.lobes);
+        (fused.mixture)(kernels, &mut job);
     } else {
         mixture_lobe_by_lobe(kernels, closure, frame, &starts[..=count], s);
     }

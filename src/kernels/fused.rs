@@ -37,7 +37,7 @@ pub struct FusedEvalJob<'a> {
     pub frame: Frame,
     pub wo: [&'a [f32]; 3],
     pub wi: [&'a [f32]; 3],
-    /// The closure's lobes in order (the first `S::LOBES`).
+    /// The closure's lobes in order (as many as the shape has; the rest unused).
     pub lobes: [FusedLobe<'a>; MAX_FUSED],
     /// `sum weight_k f_k cos` (when wanted) and `sum p_k pdf_k`, one per lane.
     pub value: Option<[&'a mut [f32]; 3]>,
@@ -50,25 +50,14 @@ pub trait Shape: 'static {
     /// Whether `models` are this shape's models, in order.
     fn matches(models: &[Option<TypeId>]) -> bool;
     fn prepare<L: Lane>(lobes: &[FusedLobe<'_>; MAX_FUSED]) -> Self::Prepared<L>;
-    /// `(sum weight_k f_k, sum p_k pdf_k)` summed in lobe order, as lobe kernels add
-    /// into rows.
-    fn eval<L: Lane>(
+    /// `(sum weight_k f_k, sum p_k pdf_k)` in lobe order at `(wo, wi)`. Without `own`
+    /// as an eval sums (from the first lobe's terms, as lobe kernels store then add);
+    /// with `own = (k, value, p pdf)`, a mixture at lobe `k`'s sample, whose own terms
+    /// stand for lobe `k`'s, summed from zero as a mixture sample's rows are.
+    fn sum<L: Lane>(
         p: &Self::Prepared<L>,
         lobes: &[FusedLobe<'_>; MAX_FUSED],
-        wo: Vec3<L>,
-        wi: Vec3<L>,
-        mode: Transport,
-    ) -> (Rgb<L>, L);
-    /// The mixture at a sample of lobe `own` (`own_value`, `own_pdf`: its weighted
-    /// value and `p pdf`), the other lobes evaluated there: summed from zero in lobe
-    /// order, as a mixture sample's rows are.
-    #[allow(clippy::too_many_arguments)]
-    fn mixture<L: Lane>(
-        p: &Self::Prepared<L>,
-        lobes: &[FusedLobe<'_>; MAX_FUSED],
-        own: usize,
-        own_value: Rgb<L>,
-        own_pdf: L,
+        own: Option<(usize, Rgb<L>, L)>,
         wo: Vec3<L>,
         wi: Vec3<L>,
         mode: Transport,
@@ -110,52 +99,29 @@ macro_rules! shape {
             }
             #[inline(always)]
             #[allow(non_snake_case)]
-            fn eval<L: Lane>(
+            fn sum<L: Lane>(
                 p: &Self::Prepared<L>,
                 lobes: &[FusedLobe<'_>; MAX_FUSED],
+                own: Option<(usize, Rgb<L>, L)>,
                 wo: Vec3<L>,
                 wi: Vec3<L>,
                 mode: Transport,
             ) -> (Rgb<L>, L) {
                 let ($first, $($m,)*) = p;
-                let (mut value, mut pdf) = weighted::<$first, L>($first, &lobes[0], wo, wi, mode);
-                let mut k = 0;
-                $(
-                    k += 1;
-                    let (v, q) = weighted::<$m, L>($m, &lobes[k], wo, wi, mode);
-                    value = value + v;
-                    pdf += q;
-                )*
-                (value, pdf)
-            }
-            #[inline(always)]
-            #[allow(non_snake_case)]
-            fn mixture<L: Lane>(
-                p: &Self::Prepared<L>,
-                lobes: &[FusedLobe<'_>; MAX_FUSED],
-                own: usize,
-                own_value: Rgb<L>,
-                own_pdf: L,
-                wo: Vec3<L>,
-                wi: Vec3<L>,
-                mode: Transport,
-            ) -> (Rgb<L>, L) {
-                let ($first, $($m,)*) = p;
-                let (mut value, mut pdf) = (Rgb::zero(), L::zero());
-                let (v, q) = if own == 0 {
-                    (own_value, own_pdf)
-                } else {
-                    weighted::<$first, L>($first, &lobes[0], wo, wi, mode)
+                let (v, q) = match own {
+                    Some((0, v, q)) => (v, q),
+                    _ => weighted::<$first, L>($first, &lobes[0], wo, wi, mode),
                 };
-                value = value + v;
-                pdf += q;
+                let (mut value, mut pdf) = match own {
+                    Some(_) => (Rgb::zero() + v, L::zero() + q),
+                    None => (v, q),
+                };
                 let mut k = 0;
                 $(
                     k += 1;
-                    let (v, q) = if own == k {
-                        (own_value, own_pdf)
-                    } else {
-                        weighted::<$m, L>($m, &lobes[k], wo, wi, mode)
+                    let (v, q) = match own {
+                        Some((o, v, q)) if o == k => (v, q),
+                        _ => weighted::<$m, L>($m, &lobes[k], wo, wi, mode),
                     };
                     value = value + v;
                     pdf += q;
@@ -183,9 +149,10 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
         if out_of_range {
             return false;
         }
-        let (value, pdf) = S::eval(
+        let (value, pdf) = S::sum(
             &p,
             &job.lobes,
+            None,
             frame.to_local(wo),
             frame.to_local(wi),
             job.mode,
@@ -205,6 +172,8 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
 pub struct FusedMixtureJob<'a> {
     pub mode: Transport,
     pub frame: Frame,
+    /// The closure's lobes in order (as [`FusedEvalJob::lobes`]).
+    pub lobes: [FusedLobe<'a>; MAX_FUSED],
     pub starts: &'a [usize],
     /// Unit `wo` and the sampled `wi` (normalized once more, as an eval given it back
     /// would: [`Directions::Sampled`]), world space.
@@ -219,15 +188,12 @@ pub struct FusedMixtureJob<'a> {
 }
 
 #[inline(always)]
-fn mixture_body<S: Shape, L: Lane>(
-    job: &mut FusedMixtureJob<'_>,
-    lobes: &[FusedLobe<'_>; MAX_FUSED],
-) {
-    let p = S::prepare::<L>(lobes);
+fn mixture_body<S: Shape, L: Lane>(job: &mut FusedMixtureJob<'_>) {
+    let p = S::prepare::<L>(&job.lobes);
     let frame = LaneFrame::<L>::splat(&job.frame);
     let mut unused = false;
     for (own, run) in job.starts.windows(2).enumerate() {
-        let probability = L::splat(lobes[own].probability);
+        let probability = L::splat(job.lobes[own].probability);
         for i in (run[0]..run[1]).step_by(L::LANES) {
             let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
             let wi = direction(job.wi, i, L::LANES, Directions::Sampled, &mut unused);
@@ -237,12 +203,10 @@ fn mixture_body<S: Shape, L: Lane>(
                 L::load(&job.own_value[2][i..]),
             );
             let own_pdf = probability * L::load(&job.own_pdf[i..]);
-            let (value, pdf) = S::mixture(
+            let (value, pdf) = S::sum(
                 &p,
-                lobes,
-                own,
-                own_value,
-                own_pdf,
+                &job.lobes,
+                Some((own, own_value, own_pdf)),
                 frame.to_local(wo),
                 frame.to_local(wi),
                 job.mode,
@@ -262,13 +226,13 @@ kernel!(
 );
 kernel!(
     /// A fused shape's mixture sums over a sorted sample chunk (`mixture_body`).
-    mixture<S: Shape>(job: &mut FusedMixtureJob<'_>, lobes: &[FusedLobe<'_>; MAX_FUSED]) => mixture_body
+    mixture<S: Shape>(job: &mut FusedMixtureJob<'_>) => mixture_body
 );
 
 /// A fused eval kernel.
 pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
 /// A fused mixture kernel.
-pub type FusedMixture = fn(Kernels, &mut FusedMixtureJob<'_>, &[FusedLobe<'_>; MAX_FUSED]);
+pub type FusedMixture = fn(Kernels, &mut FusedMixtureJob<'_>);
 /// [`Shape::matches`] of a shape.
 type Matches = fn(&[Option<TypeId>]) -> bool;
 
