@@ -1046,8 +1046,9 @@ void glint_material_destroy(struct glint_material *material);
  Build (and finish) the closure of one shading point of `material` in `arena`:
  `overrides` (NULL with `override_count == 0` for none) set textured parameters
  for this point; the material expands into weighted lobes in the context's frame,
- drops those whose `luminance(weight * albedo(wo))` is below the runtime's `prune=`
- threshold, and fixes lobe selection from the rest. The context and overrides are
+ drops those whose `luminance(weight * albedo(wo))` (by each lobe's albedo
+ estimate, README "Pruning") is below the runtime's `prune=` threshold, and fixes
+ lobe selection from the rest. The context and overrides are
  checked before the arena is touched, so a failing call uses no slot.
 
  # Safety
@@ -1079,7 +1080,7 @@ const char *glint_last_error(void);
  core, the default; 1 = batch calls stay on the calling thread; N = a pool of N),
  `plugins` (a directory whose `*.so` plugins are loaded, in file-name order) and
  `prune` (in [0, 1], default 0.001: materials do not emit a lobe whose
- `luminance(weight * albedo(wo))` is below it).
+ `luminance(weight * albedo(wo))`, by the lobe's albedo estimate, is below it).
 
  # Safety
  `config` is NULL or a NUL-terminated string; `out` is valid for writes.

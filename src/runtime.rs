@@ -27,7 +27,8 @@ pub struct Settings {
     pub threads: usize,
     /// A directory whose `*.so` plugins are loaded when the runtime is created.
     pub plugins: Option<String>,
-    /// Materials do not emit a lobe whose `luminance(weight * albedo(wo))` is below
+    /// Materials do not emit a lobe whose `luminance(weight * albedo(wo))` (its albedo
+    /// estimate, `Model::albedo_estimate`) is below
     /// this (`prune=`, in [0, 1]; default `materials::DEFAULT_PRUNE`).
     pub prune: f32,
 }

@@ -354,8 +354,10 @@ fn albedo_matches_quadrature() {
 }
 
 /// A pruned closure differs from the full one by at most the pruned lobes'
-/// `luminance(weight * albedo(wo))`, each below the threshold: checked on the albedo
-/// and, integrated over directions, on the eval.
+/// `luminance(weight * albedo(wo))`. Pruning weighs lobes by their albedo estimates,
+/// so each may exceed the threshold by its estimate's tolerance (1% for the diffuse,
+/// 0 for the sheen and clearcoat, which are what faint lobes are here); this sample
+/// stays within the threshold itself. Checked on the albedo.
 #[test]
 fn pruning_error_is_bounded_by_the_threshold() {
     let registry = registry();

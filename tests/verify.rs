@@ -54,6 +54,9 @@ enum Defect {
     AlbedoAboveOne,
     /// Honest, but its `albedo` claims 0.6 for a true 0.8.
     WrongAlbedo,
+    /// Honest, but its albedo estimate (selection, pruning) is 0.7, 12% off, where it
+    /// documents 5%.
+    WrongEstimate,
 }
 
 struct Broken(Defect);
@@ -135,6 +138,17 @@ impl LobeType for Broken {
     fn albedo_tolerance(&self, _params: &[f32]) -> f32 {
         1e-3
     }
+    fn albedo_estimate_decoded(&self, p: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
+        let a = self.albedo(p, wo, mode);
+        if self.0 == Defect::WrongEstimate {
+            a * 0.875
+        } else {
+            a
+        }
+    }
+    fn albedo_estimate_tolerance(&self, _params: &[f32]) -> f32 {
+        0.05
+    }
 }
 
 static WRONG_PDF: Broken = Broken(Defect::WrongPdf);
@@ -142,6 +156,7 @@ static NEGATIVE: Broken = Broken(Defect::NegativeValue);
 static NON_RECIPROCAL: Broken = Broken(Defect::NonReciprocal);
 static ABOVE_ONE: Broken = Broken(Defect::AlbedoAboveOne);
 static WRONG_ALBEDO: Broken = Broken(Defect::WrongAlbedo);
+static WRONG_ESTIMATE: Broken = Broken(Defect::WrongEstimate);
 
 fn verify(lobe: &'static Broken) -> Report {
     let lobe: &'static dyn LobeType = lobe;
@@ -230,4 +245,17 @@ fn the_honest_lambert_passes_the_same_checks() {
     let lambert = registry.get(registry.find("lambert").unwrap()).unwrap();
     let r = Report::new(Tier::Fast, vec![verify::verify_lobe(lambert, Tier::Fast)]);
     assert!(r.passed(), "{:?}", r.failures());
+}
+
+#[test]
+fn an_estimate_off_its_tolerance_fails_the_estimate_check() {
+    let r = verify(&WRONG_ESTIMATE);
+    let case = &r.lobes[0].cases[0];
+    assert!(case.albedo_estimate_failures > 0);
+    assert!((case.albedo_estimate_max_rel_err - 0.125).abs() < 1e-6);
+    assert!(
+        r.failures().iter().all(|f| f.contains("albedo estimate")),
+        "{:?}",
+        r.failures()
+    );
 }

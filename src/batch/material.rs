@@ -5,7 +5,7 @@
 //! the unit `wo`, the shading frame and the parameter block with the lane's overrides,
 //! expands it (`MaterialModel::expand`, the same code as `Material::build_closure`)
 //! into per-slot SoA rows of decoded lobe blocks and weights, and runs each slot's
-//! lobe kernels over the rows (`LobeLanes::PerLane`): first the albedo, whose
+//! lobe kernels over the rows (`LobeLanes::PerLane`): first the albedo estimate, whose
 //! `luminance(weight * albedo)` prunes the slot per lane and sets the selection
 //! probabilities by the closure's rule (`closure::selection`), then eval, pdf or
 //! sample. A lane's result is that of the closure `glint_material_closure` builds for
@@ -384,24 +384,23 @@ fn gather(row: &mut [f32], src: &[f32], lanes: &[u32]) {
     }
 }
 
-/// Each slot's `weight * albedo(wo)`, then per lane the closure's pruning and
-/// selection rules (`Material::emit`, `closure::selection`) in SIMD: the same
-/// operations in the same order, so the same probabilities. Dropped slots' weights
-/// become 0.
-fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> Result<(), Error> {
-    let slots = material.slots();
+/// Each live slot's `weight * albedo(wo)` into the albedo rows: the albedo estimates
+/// that selection and pruning weigh slots by, or the albedos.
+fn slot_albedos(
+    kernels: Kernels,
+    material: &Material,
+    len: usize,
+    s: &mut Scratch,
+    live: &[bool; MAX_SLOTS],
+    estimate: bool,
+) {
     let rows = &mut s.material;
     // Out of the rows while the kernels read them, put back at the end.
     let mut albedo_rows = std::mem::take(&mut rows.albedo);
     let albedo = grow(&mut albedo_rows, MAX_SLOTS * 3 * len);
     // The albedo jobs read (and ignore) probability rows.
     grow(&mut rows.probability, MAX_SLOTS * len);
-    let mut live = [false; MAX_SLOTS];
-    for (k, (_, lobe)) in slots.iter().enumerate() {
-        // Emitted on some lane: any weight channel > 0.
-        live[k] = rows.weight[k * 3 * len..(k + 1) * 3 * len]
-            .iter()
-            .any(|&w| w > 0.0);
+    for (k, (_, lobe)) in material.slots().iter().enumerate() {
         if !live[k] {
             continue;
         }
@@ -414,11 +413,33 @@ fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> 
             wo: view3(&s.wo, len),
             lobe: rows.lanes(k, lobe.decoded_len(), len),
             store: true,
+            estimate,
             value: [r, g, b],
             out_of_range: false,
         };
         lobe.albedo_lanes(kernels, &mut job);
     }
+    rows.albedo = albedo_rows;
+}
+
+/// Each slot's `weight * albedo estimate(wo)`, then per lane the closure's pruning and
+/// selection rules (`Material::emit`, `closure::selection`) in SIMD: the same
+/// operations in the same order, so the same probabilities. Dropped slots' weights
+/// become 0.
+fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> Result<(), Error> {
+    let slots = material.slots();
+    let mut live = [false; MAX_SLOTS];
+    for (k, l) in live.iter_mut().enumerate().take(slots.len()) {
+        // Emitted on some lane: any weight channel > 0.
+        *l = s.material.weight[k * 3 * len..(k + 1) * 3 * len]
+            .iter()
+            .any(|&w| w > 0.0);
+    }
+    slot_albedos(kernels, material, len, s, &live, true);
+    let rows = &mut s.material;
+    // Out of the rows while the kernel reads them, put back at the end.
+    let mut albedo_rows = std::mem::take(&mut rows.albedo);
+    let albedo = grow(&mut albedo_rows, MAX_SLOTS * 3 * len);
     let mut job = SelectJob {
         len,
         count: slots.len(),
@@ -674,8 +695,10 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
             for_chunks(input, start..end, s, |lanes, s| {
                 let len = padded(lanes.len());
                 stage_chunk(exec.kernels, input, lanes, len, s, &mut failure)?;
-                // The kept slots' `weight * albedo`, as pruning computed them (a dropped
-                // slot's weight is 0 on its lane).
+                // The kept slots' `weight * albedo` (a dropped slot's weight is 0 on its
+                // lane); pruning weighed them by estimates.
+                let live = s.material.live;
+                slot_albedos(exec.kernels, input.material, len, s, &live, false);
                 let sum = rows3(&mut s.value, len);
                 let rows = &s.material;
                 for row in sum {

@@ -855,6 +855,7 @@ fn albedo_in_place(
             wo: rows(wo, &lanes),
             lobe: uniform_lobe(closure, k),
             store: k == 0,
+            estimate: false,
             value: rows_mut(out, &local),
             out_of_range: false,
         };
@@ -889,6 +890,7 @@ fn albedo_staged<'a, C: ClosureSource<'a>>(
                 wo: view3(&s.wo, len),
                 lobe: lanes,
                 store: false,
+                estimate: false,
                 value: rows3(&mut s.value, len),
                 out_of_range: false,
             };

@@ -2,7 +2,8 @@
 //! caller-owned [`Arena`] and immutable once finished.
 //!
 //! Lobe selection for sampling is proportional to `luminance(weight * albedo(wo))`,
-//! computed once in [`Closure::finish`] from the `wo` given at creation (or, without
+//! with each lobe's albedo estimate (`Model::albedo_estimate`: the albedo, or a
+//! cheaper estimate within a documented tolerance), computed once in [`Closure::finish`] from the `wo` given at creation (or, without
 //! one, from normal incidence in each lobe's frame). `eval` and `pdf` return the
 //! full mixture, so `pdf` is exactly the density `sample` draws from.
 
@@ -319,14 +320,17 @@ impl Closure {
                 let wo = self
                     .wo
                     .map_or(Vec3::splat(0.0, 0.0, 1.0), |w| l.frame.to_local(w));
-                let albedo = l.lobe.albedo_decoded(self.lobe_decoded(k), wo, self.mode);
+                let albedo = l
+                    .lobe
+                    .albedo_estimate_decoded(self.lobe_decoded(k), wo, self.mode);
                 shares[k] = (l.weight * albedo).luminance();
             }
         }
         self.finish_with_shares(&shares[..n])
     }
 
-    /// [`Self::finish`] with each lobe's `luminance(weight * albedo(wo))` already known
+    /// [`Self::finish`] with each lobe's `luminance(weight * albedo(wo))` (albedo
+    /// estimates) already known
     /// (a material computes them to prune its lobes).
     pub(crate) fn finish_with_shares(&mut self, shares: &[f32]) -> Result<(), Error> {
         if self.finished {

@@ -377,7 +377,7 @@ pub extern "C" fn glint_last_error() -> *const c_char {
 /// core, the default; 1 = batch calls stay on the calling thread; N = a pool of N),
 /// `plugins` (a directory whose `*.so` plugins are loaded, in file-name order) and
 /// `prune` (in [0, 1], default 0.001: materials do not emit a lobe whose
-/// `luminance(weight * albedo(wo))` is below it).
+/// `luminance(weight * albedo(wo))`, by the lobe's albedo estimate, is below it).
 ///
 /// # Safety
 /// `config` is NULL or a NUL-terminated string; `out` is valid for writes.

@@ -204,6 +204,9 @@ pub struct AlbedoJob<'a> {
     pub wo: [&'a [f32]; 3],
     pub lobe: LobeLanes<'a>,
     pub store: bool,
+    /// The lobes' albedo estimates ([`Model::albedo_estimate`]), as selection and
+    /// pruning weigh them, instead of their albedos.
+    pub estimate: bool,
     /// `weight * albedo`.
     pub value: [&'a mut [f32]; 3],
     pub out_of_range: bool,
@@ -599,7 +602,13 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for AlbedoJob<'_> {
     #[inline(always)]
     fn run(&mut self, i: usize, n: usize, p: &M::Prepared<L>, lanes: &LaneLobe<L>) {
         let wo = direction(self.wo, i, n, self.directions, &mut self.out_of_range);
-        let v = lanes.weight * M::albedo(p, lanes.frame.to_local(wo), self.mode);
+        let local = lanes.frame.to_local(wo);
+        let albedo = if self.estimate {
+            M::albedo_estimate(p, local, self.mode)
+        } else {
+            M::albedo(p, local, self.mode)
+        };
+        let v = lanes.weight * albedo;
         for (v, row) in v.to_array().into_iter().zip(self.value.iter_mut()) {
             put(v, row, i, n, self.store);
         }

@@ -37,6 +37,7 @@ use super::lambert::cosine_hemisphere;
 use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
+use crate::albedo_table::disney::DiffuseTable;
 use crate::fresnel::schlick_weight;
 use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
@@ -202,6 +203,11 @@ impl Model for DisneyDiffuse {
         1e-4
     }
 
+    /// [`DiffuseTable`], measured in tests/lobe_disney_diffuse.rs.
+    fn albedo_estimate_tolerance(_params: &[f32]) -> f32 {
+        0.01
+    }
+
     /// The closed-form albedo's largest channel over 65 `cos_o` from grazing to normal
     /// (it is smooth in `cos_o`; the 1e-3 margin covers the grid), at least 1.
     fn energy_bound(params: &[f32]) -> f32 {
@@ -322,4 +328,25 @@ impl Model for DisneyDiffuse {
         let total = a_d * (L::one() - s) + a_ss * s;
         Rgb::select(wo.z.gt(L::zero()), p.base_color * total, Rgb::zero())
     }
+
+    /// [`DiffuseTable`]: the closed form tabulated.
+    #[inline(always)]
+    fn albedo_estimate<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
+        let total = DiffuseTable::estimate(wo, p.roughness, p.subsurface);
+        Rgb::select(wo.z.gt(L::zero()), p.base_color * total, Rgb::zero())
+    }
+}
+
+/// The closed-form albedos of the `Fd` and subsurface shapes (white base color) at
+/// `cos_o` with `roughness`, from which [`DiffuseTable`] is built.
+pub(crate) fn shape_albedos(cos_o: f32, roughness: f32) -> [f32; 2] {
+    let wo = Vec3::new((1.0 - cos_o * cos_o).max(0.0).sqrt(), 0.0, cos_o.max(1e-6));
+    [0.0, 1.0].map(|subsurface| {
+        let p = Prepared {
+            base_color: Rgb::new(1.0, 1.0, 1.0),
+            roughness,
+            subsurface,
+        };
+        DisneyDiffuse::albedo(&p, wo, Transport::Radiance).g
+    })
 }

@@ -131,6 +131,11 @@ impl Model for DisneySpecular {
         }
     }
 
+    /// [`SpecularTable::estimate`]: exact when isotropic.
+    fn albedo_estimate_tolerance(params: &[f32]) -> f32 {
+        if params[ANISOTROPIC] > 0.0 { 0.2 } else { 0.0 }
+    }
+
     #[inline(always)]
     fn prepare<L: Lane>(p: Params<'_, L>) -> Prepared<L> {
         let roughness = p.float(ROUGHNESS);
@@ -208,13 +213,29 @@ impl Model for DisneySpecular {
 
     #[inline(always)]
     fn albedo<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
-        let (a, b) = SpecularTable::lookup(wo, p.roughness, p.anisotropic);
-        let albedo = p.f0.map(
-            #[inline(always)]
-            |f0| f0 * a + b,
-        );
-        Rgb::select(wo.z.gt(L::zero()), albedo, Rgb::zero())
+        schlick_split(p, wo, SpecularTable::lookup(wo, p.roughness, p.anisotropic))
     }
+
+    /// The isotropic table as `albedo`; anisotropic lanes at the table's nearest
+    /// azimuth and aspect nodes ([`SpecularTable::estimate`]).
+    #[inline(always)]
+    fn albedo_estimate<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
+        schlick_split(
+            p,
+            wo,
+            SpecularTable::estimate(wo, p.roughness, p.anisotropic),
+        )
+    }
+}
+
+/// The albedo `f0 A + B` from Schlick's split `(A, B)`; 0 below the surface.
+#[inline(always)]
+fn schlick_split<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, (a, b): (L, L)) -> Rgb<L> {
+    let albedo = p.f0.map(
+        #[inline(always)]
+        |f0| f0 * a + b,
+    );
+    Rgb::select(wo.z.gt(L::zero()), albedo, Rgb::zero())
 }
 
 #[cfg(test)]

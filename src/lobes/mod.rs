@@ -295,6 +295,11 @@ pub trait Model: Send + Sync + 'static {
     fn energy_bound(_params: &[f32]) -> f32 {
         1.0
     }
+    /// Documented relative accuracy of [`Model::albedo_estimate`] against `albedo`
+    /// with these parameters (the harness checks it); 0 when they are the same.
+    fn albedo_estimate_tolerance(_params: &[f32]) -> f32 {
+        0.0
+    }
 
     /// Length of the decoded block [`Model::decode`] writes.
     const DECODED_LEN: usize = crate::params::block_size(Self::PARAMS);
@@ -341,6 +346,13 @@ pub trait Model: Send + Sync + 'static {
     ) -> Sample<L>;
     /// Directional albedo `R(wo)`: the integral of `eval(wo, wi)` over all `wi`.
     fn albedo<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, mode: Transport) -> Rgb<L>;
+    /// What lobe selection and pruning weigh the lobe by: `albedo`, or a cheaper
+    /// estimate of it within [`Model::albedo_estimate_tolerance`]. Selection only
+    /// needs shares, and every shading point pays for them. Default: `albedo`.
+    #[inline(always)]
+    fn albedo_estimate<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, mode: Transport) -> Rgb<L> {
+        Self::albedo(p, wo, mode)
+    }
 }
 
 /// A lobe type as the registry and closures see it: scalar, object-safe, and the
@@ -424,6 +436,16 @@ pub trait LobeType: Send + Sync {
     fn albedo_decoded(&self, decoded: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
         self.albedo(decoded, wo, mode)
     }
+    /// [`Model::albedo_estimate`] from a decoded block: what selection and pruning
+    /// weigh the lobe by. The default is [`LobeType::albedo_decoded`].
+    fn albedo_estimate_decoded(&self, decoded: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
+        self.albedo_decoded(decoded, wo, mode)
+    }
+    /// Documented relative accuracy of [`LobeType::albedo_estimate_decoded`] against
+    /// the albedo with these parameters; 0 (the default) when they are the same.
+    fn albedo_estimate_tolerance(&self, _params: &[f32]) -> f32 {
+        0.0
+    }
 
     /// `eval_decoded(wo, wi)` and the reverse pdf `eval_decoded(wi, wo).pdf` (built-in
     /// lobes read the block once for both).
@@ -480,9 +502,15 @@ pub trait LobeType: Send + Sync {
     fn model(&self) -> Option<std::any::TypeId> {
         None
     }
-    /// `albedo` over a group of lanes; the default loops over [`LobeType::albedo_decoded`].
+    /// `albedo` (or its estimate, as `job.estimate` says) over a group of lanes; the
+    /// default loops over [`LobeType::albedo_decoded`] or
+    /// [`LobeType::albedo_estimate_decoded`].
     fn albedo_lanes(&self, _kernels: Kernels, job: &mut AlbedoJob<'_>) {
-        kernels::albedo_each_lane(job, |d, wo, mode| self.albedo_decoded(d, wo, mode));
+        if job.estimate {
+            kernels::albedo_each_lane(job, |d, wo, mode| self.albedo_estimate_decoded(d, wo, mode));
+        } else {
+            kernels::albedo_each_lane(job, |d, wo, mode| self.albedo_decoded(d, wo, mode));
+        }
     }
 }
 
@@ -604,6 +632,12 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn albedo_tolerance(&self, params: &[f32]) -> f32 {
         M::albedo_tolerance(params)
+    }
+    fn albedo_estimate_decoded(&self, decoded: &[f32], wo: Vec3<f32>, mode: Transport) -> Rgb<f32> {
+        M::albedo_estimate(&M::prepare(Params::new(decoded)), wo, mode)
+    }
+    fn albedo_estimate_tolerance(&self, params: &[f32]) -> f32 {
+        M::albedo_estimate_tolerance(params)
     }
     fn energy_bound(&self, params: &[f32]) -> f32 {
         M::energy_bound(params)

@@ -248,7 +248,8 @@ impl Material {
     /// Add the lobes of one shading point (`block`: the parameters with its overrides
     /// applied) to the open `closure`, their weights
     /// scaled by `scale`: expansion, then pruning. Returns each added lobe's
-    /// `luminance(weight * albedo(wo))`, as `Closure::finish` would compute it, and
+    /// `luminance(weight * albedo(wo))` with its albedo estimate, as `Closure::finish`
+    /// would compute it, and
     /// how many were added (at least one: when every lobe is below the threshold, the
     /// strongest is kept).
     pub(crate) fn emit(
@@ -278,8 +279,11 @@ impl Material {
             }
             let at = push(closure, k)?;
             let lobe = &self.slots[k].1;
-            let albedo =
-                lobe.albedo_decoded(closure.lobe_decoded(at), local.wo, closure.transport());
+            let albedo = lobe.albedo_estimate_decoded(
+                closure.lobe_decoded(at),
+                local.wo,
+                closure.transport(),
+            );
             let share = (weight * albedo).luminance();
             if share < self.prune {
                 closure.pop_lobe();

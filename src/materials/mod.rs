@@ -12,8 +12,9 @@
 //! A compiled [`Material`] holds a validated parameter block and its slots' lobe types,
 //! resolved once per scene material. Per shading point it takes overrides (textured
 //! parameters, by index), expands, and builds a closure: each lobe's
-//! `luminance(weight * albedo(wo))` both prunes it (below the runtime's `prune=`
-//! threshold it is not emitted) and sets its selection probability.
+//! `luminance(weight * albedo(wo))`, with the lobe's albedo estimate
+//! (`Model::albedo_estimate`), both prunes it (below the runtime's `prune=` threshold
+//! it is not emitted) and sets its selection probability.
 
 pub mod compiled;
 pub mod disney;

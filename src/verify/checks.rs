@@ -540,6 +540,22 @@ fn energy(
             });
         }
     }
+    // The estimate that selection and pruning weigh the lobe by, against its albedo.
+    let mut decoded = vec![0.0; lobe.decoded_len()];
+    lobe.decode(p, &mut decoded);
+    let estimate = rgb64(lobe.albedo_estimate_decoded(&decoded, wo, Transport::Radiance));
+    let tol = f64::from(lobe.albedo_estimate_tolerance(p));
+    for c in 0..3 {
+        let err = (estimate[c] - claimed[c]).abs();
+        let scale = claimed[c].max(estimate[c]);
+        if scale > 0.0 {
+            report.albedo_estimate_max_rel_err =
+                report.albedo_estimate_max_rel_err.max(err / scale);
+        }
+        if err > tol * scale + 1e-6 {
+            report.albedo_estimate_failures += 1;
+        }
+    }
 }
 
 /// A finished closure holding only `lobe` with parameters `p` in `frame` (registered

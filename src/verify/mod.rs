@@ -17,7 +17,8 @@
 //!    where refraction carries no `1/eta^2` radiance compression), estimated by importance
 //!    sampling and cross-checked by a uniform, adaptively refined quadrature of `eval`
 //!    over the sphere, and the lobe's `albedo(wo)`
-//!    against that estimate within its documented tolerance;
+//!    against that estimate within its documented tolerance, and its albedo estimate
+//!    (selection, pruning) against `albedo(wo)` within the estimate's tolerance;
 //! 5. hard cases: grazing, horizon, below-surface, equal and opposite directions, every
 //!    schema parameter at its corners (0, 1e-7, 1e-4, the delta threshold and either
 //!    side of it, 1, IOR 1 +- 1e-6, 1e-3, 1e3...) and random parameters over each

@@ -96,6 +96,10 @@ pub struct CaseReport {
     pub albedo_failures: u64,
     /// The first albedo failure: where, what was claimed, what was estimated.
     pub albedo_failure_detail: Option<String>,
+    /// Worst relative difference of the albedo estimate (selection, pruning) from
+    /// the albedo, and how many channels exceed its documented tolerance.
+    pub albedo_estimate_max_rel_err: f64,
+    pub albedo_estimate_failures: u64,
     pub batch_max_err: f64,
     /// Worst batch-vs-scalar difference of sample outputs.
     pub batch_sample_err: f64,
@@ -119,6 +123,8 @@ impl CaseReport {
             albedo_max_rel_err: 0.0,
             albedo_failures: 0,
             albedo_failure_detail: None,
+            albedo_estimate_max_rel_err: 0.0,
+            albedo_estimate_failures: 0,
             batch_max_err: 0.0,
             batch_sample_err: 0.0,
         }
@@ -241,6 +247,12 @@ impl CaseReport {
                 "energy: albedo(wo) off its documented tolerance (relative error {:.3e}; {})",
                 self.albedo_max_rel_err,
                 self.albedo_failure_detail.as_deref().unwrap_or("")
+            ));
+        }
+        if self.albedo_estimate_failures > 0 {
+            out.push(format!(
+                "energy: albedo estimate off its documented tolerance (relative error {:.3e})",
+                self.albedo_estimate_max_rel_err
             ));
         }
         if self.batch_max_err > BATCH_TOLERANCE {
@@ -461,6 +473,8 @@ impl Report {
                     "uniform_mismatches": c.uniform_mismatches,
                     "albedo_max_rel_err": num(c.albedo_max_rel_err),
                     "albedo_failures": c.albedo_failures,
+                    "albedo_estimate_max_rel_err": num(c.albedo_estimate_max_rel_err),
+                    "albedo_estimate_failures": c.albedo_estimate_failures,
                     "batch_max_err": num(c.batch_max_err),
                     "batch_sample_err": num(c.batch_sample_err),
                     "failures": c.failures(self.alpha_per_test),
