@@ -58,6 +58,7 @@ static void layered_samples_report_class_and_component(void **state)
     load(fx, GLINT_TEST_V2_LAYERED_PATH);
     info = lobe_type(fx->rt, lobe_id(fx->rt, "glint_test_v2_layered"));
     assert_int_equal(info.flags, GLINT_FLAG_REFLECTION | GLINT_FLAG_DIFFUSE | GLINT_FLAG_GLOSSY);
+    assert_int_equal(info.component_count, 2); /* as declared */
     c = json_closure(fx, LAYERED, NULL);
     lcg_seed(&g, 2);
     for (i = 0; i < N; i++) {
@@ -183,6 +184,7 @@ static void v1_plugins_report_the_type_class(void **state)
     load(fx, GLINT_TEST_V2_LAYERED_PATH);
     load(fx, GLINT_MINIMAL_PATH);
     load(fx, GLINT_CHARLIE_PATH);
+    assert_int_equal(lobe_type(fx->rt, lobe_id(fx->rt, "charlie")).component_count, 1);
     for (k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         const glint_closure *c = json_closure(fx, cases[k].json, NULL);
         sample_batch(c, &b, 5 + k);

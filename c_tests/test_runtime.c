@@ -200,6 +200,70 @@ static void larger_struct_size_is_accepted(void **state)
     assert_int_equal(bigp.future[31], 0xab);
 }
 
+/* component_count: 2 for the dielectric (reflection, transmission), 1 for the other
+ * built-ins; every type's samples report a component below it, and the dielectric
+ * reports both of its own. */
+static void lobe_info_counts_components(void **state)
+{
+    fixture *fx = *state;
+    uint32_t n = lobe_type_count(fx->rt), id;
+    const glint_vec3 wo = test_wo();
+    for (id = 0; id < n; id++) {
+        glint_lobe_info t = lobe_type(fx->rt, id);
+        int dielectric = strcmp(t.name, "dielectric") == 0;
+        int seen[2] = {0, 0};
+        glint_closure *c;
+        lcg g;
+        int i;
+        assert_int_equal(t.component_count, dielectric ? 2u : 1u);
+        assert_ok(glint_arena_reset(fx->arena));
+        c = single_lobe_closure(fx, id, NULL, 0, &wo);
+        lcg_seed(&g, id + 1);
+        for (i = 0; i < 512; i++) {
+            glint_sample_result s = sample_result_init();
+            float u_c = lcg_next(&g), u0 = lcg_next(&g), u1 = lcg_next(&g);
+            glint_status st = glint_sample_lobe(c, 0, wo, u_c, u0, u1, &s);
+            assert_true(st == GLINT_OK || st == GLINT_NO_SAMPLE);
+            assert_true(s.component < t.component_count);
+            seen[s.component > 0]++;
+        }
+        if (dielectric)
+            assert_true(seen[0] > 0 && seen[1] > 0);
+    }
+}
+
+/* A caller built before component_count was appended passes the older struct_size: the
+ * fields it knows are filled, nothing past them is written; a size that cuts the new
+ * field is refused. */
+static void lobe_info_takes_the_older_size(void **state)
+{
+    fixture *fx = *state;
+    const size_t old_size = offsetof(glint_lobe_info, component_count);
+    const uint32_t id = lobe_id(fx->rt, "dielectric");
+    const glint_lobe_info full = lobe_type(fx->rt, id);
+    union {
+        glint_lobe_info info;
+        unsigned char bytes[sizeof(glint_lobe_info) + 8];
+    } u;
+    size_t i;
+    memset(&u, 0xab, sizeof u);
+    u.info.struct_size = (uint32_t)old_size;
+    assert_ok(glint_lobe_type_info(fx->rt, id, &u.info));
+    assert_int_equal(u.info.struct_size, old_size);
+    assert_string_equal(u.info.name, "dielectric");
+    assert_int_equal(u.info.flags, full.flags);
+    assert_int_equal(u.info.param_block_size, full.param_block_size);
+    for (i = old_size; i < sizeof u.bytes; i++)
+        assert_int_equal(u.bytes[i], 0xab);
+
+    memset(&u, 0xab, sizeof u);
+    u.info.struct_size = (uint32_t)old_size + 1;
+    check_error(fx, glint_lobe_type_info(fx->rt, 0, &u.info), GLINT_ERROR_STRUCT_SIZE);
+    assert_error_mentions("struct_size");
+    for (i = sizeof u.info.struct_size; i < sizeof u.bytes; i++)
+        assert_int_equal(u.bytes[i], 0xab);
+}
+
 static void param_schema_is_consistent(void **state)
 {
     fixture *fx = *state;
@@ -385,6 +449,10 @@ int main(void)
                                         fixture_teardown),
         cmocka_unit_test_setup_teardown(lobe_type_query_errors, fixture_setup, fixture_teardown),
         cmocka_unit_test_setup_teardown(larger_struct_size_is_accepted, fixture_setup,
+                                        fixture_teardown),
+        cmocka_unit_test_setup_teardown(lobe_info_counts_components, fixture_setup,
+                                        fixture_teardown),
+        cmocka_unit_test_setup_teardown(lobe_info_takes_the_older_size, fixture_setup,
                                         fixture_teardown),
         cmocka_unit_test_setup_teardown(param_schema_is_consistent, fixture_setup,
                                         fixture_teardown),

@@ -651,6 +651,14 @@ typedef struct glint_lobe_info {
    Floats in the parameter block `glint_closure_add_lobe` takes.
    */
   uint32_t param_block_size;
+  /*
+   How many components (sub-lobes) its samples report
+   (`glint_sample_result.component` is below it): a `dielectric` 2 (reflection,
+   transmission), other built-ins 1, a plugin what it declares. Appended: a caller
+   built against a header without it passes that header's `sizeof` and is not
+   written past it.
+   */
+  uint32_t component_count;
 } glint_lobe_info;
 
 #define GLINT_OK 0
@@ -1152,6 +1160,8 @@ glint_status glint_lobe_type_find(const struct glint_runtime *runtime, const cha
 
 /*
  Describe lobe type `id`. The strings live as long as the runtime.
+ `out->struct_size` is `sizeof(glint_lobe_info)` or the size before
+ `component_count` was appended.
 
  # Safety
  `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.

@@ -57,6 +57,8 @@ enum Defect {
     /// Honest, but its albedo estimate (selection, pruning) is 0.7, 12% off, where it
     /// documents 5%.
     WrongEstimate,
+    /// Honest, but its samples report component 1 of a type with one component.
+    ComponentOutOfRange,
 }
 
 struct Broken(Defect);
@@ -123,7 +125,11 @@ impl LobeType for Broken {
             eta: 1.0,
             roughness: 1.0,
             class: flags::DIFFUSE as f32,
-            component: 0.0,
+            component: if self.0 == Defect::ComponentOutOfRange {
+                1.0
+            } else {
+                0.0
+            },
         }
     }
     fn albedo(&self, _p: &[f32], wo: Vec3<f32>, _mode: Transport) -> Rgb<f32> {
@@ -157,6 +163,7 @@ static NON_RECIPROCAL: Broken = Broken(Defect::NonReciprocal);
 static ABOVE_ONE: Broken = Broken(Defect::AlbedoAboveOne);
 static WRONG_ALBEDO: Broken = Broken(Defect::WrongAlbedo);
 static WRONG_ESTIMATE: Broken = Broken(Defect::WrongEstimate);
+static COMPONENT_OUT_OF_RANGE: Broken = Broken(Defect::ComponentOutOfRange);
 
 fn verify(lobe: &'static Broken) -> Report {
     let lobe: &'static dyn LobeType = lobe;
@@ -255,6 +262,19 @@ fn an_estimate_off_its_tolerance_fails_the_estimate_check() {
     assert!((case.albedo_estimate_max_rel_err - 0.125).abs() < 1e-6);
     assert!(
         r.failures().iter().all(|f| f.contains("albedo estimate")),
+        "{:?}",
+        r.failures()
+    );
+}
+
+#[test]
+fn a_component_beyond_the_count_fails_consistency() {
+    let r = verify(&COMPONENT_OUT_OF_RANGE);
+    assert!(r.lobes[0].cases[0].flag_errors > 0);
+    assert!(
+        r.failures()
+            .iter()
+            .all(|f| f.contains("class or component")),
         "{:?}",
         r.failures()
     );

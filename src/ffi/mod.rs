@@ -278,8 +278,8 @@ struct VersionedOut<T> {
 impl<T> VersionedOut<T> {
     fn write(&self, value: T) {
         // SAFETY: `out_versioned` checked `p` and the caller's contract gives `size`
-        // writable bytes there; `value` holds at least `size` bytes, and the structs
-        // this serves are 4-byte fields without padding.
+        // writable bytes there; `value` holds at least `size` bytes (padding between
+        // fields is copied as bytes and, as in any C struct, unspecified).
         unsafe {
             std::ptr::copy_nonoverlapping(
                 (&value as *const T).cast::<u8>(),

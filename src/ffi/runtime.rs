@@ -255,7 +255,16 @@ pub struct glint_lobe_info {
     pub param_count: u32,
     /// Floats in the parameter block `glint_closure_add_lobe` takes.
     pub param_block_size: u32,
+    /// How many components (sub-lobes) its samples report
+    /// (`glint_sample_result.component` is below it): a `dielectric` 2 (reflection,
+    /// transmission), other built-ins 1, a plugin what it declares. Appended: a caller
+    /// built against a header without it passes that header's `sizeof` and is not
+    /// written past it.
+    pub component_count: u32,
 }
+
+/// `struct_size` of `glint_lobe_info` before `component_count`, still accepted.
+const LOBE_INFO_V1_SIZE: usize = std::mem::offset_of!(glint_lobe_info, component_count);
 
 impl Sized32 for glint_lobe_info {
     fn struct_size(&self) -> u32 {
@@ -273,6 +282,7 @@ impl Output for glint_lobe_info {
             reciprocal: 0,
             param_count: 0,
             param_block_size: 0,
+            component_count: 0,
         }
     }
 }
@@ -546,6 +556,8 @@ pub unsafe extern "C" fn glint_lobe_type_find(
 }
 
 /// Describe lobe type `id`. The strings live as long as the runtime.
+/// `out->struct_size` is `sizeof(glint_lobe_info)` or the size before
+/// `component_count` was appended.
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
@@ -557,12 +569,12 @@ pub unsafe extern "C" fn glint_lobe_type_info(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let out = unsafe { out_struct(out, "info") }?;
+        let out = unsafe { out_versioned(out, LOBE_INFO_V1_SIZE, "info") }?;
         // SAFETY: per the contract.
         let rt = unsafe { runtime_ref(runtime) }?;
         let t = rt.runtime.registry.get(id)?;
         let s = &rt.strings[id as usize];
-        *out = glint_lobe_info {
+        out.write(glint_lobe_info {
             struct_size: out.struct_size,
             name: s.name.as_ptr(),
             summary: s.summary.as_ptr(),
@@ -570,7 +582,8 @@ pub unsafe extern "C" fn glint_lobe_type_info(
             reciprocal: u32::from(t.reciprocal()),
             param_count: t.params().len() as u32,
             param_block_size: params::block_size(t.params()) as u32,
-        };
+            component_count: t.component_count(),
+        });
         Ok(())
     })
 }

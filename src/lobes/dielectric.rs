@@ -202,6 +202,8 @@ impl Model for Dielectric {
     ];
     const FLAGS: u32 = flags::REFLECTION | flags::TRANSMISSION | flags::GLOSSY | flags::SPECULAR;
     const RECIPROCAL: bool = false;
+    /// Reflection 0, transmission 1.
+    const COMPONENTS: u32 = 2;
     const VERIFY_CASES: &'static [VerifyCase] = &[
         VerifyCase {
             name: "ggx rough",

@@ -282,6 +282,8 @@ pub trait Model: Send + Sync + 'static {
     const FLAGS: u32;
     /// Whether `f(wo, wi) == f(wi, wo)` holds for the raw BSDF (radiance transport).
     const RECIPROCAL: bool;
+    /// How many components (sub-lobes) samples report: 0 .. COMPONENTS - 1.
+    const COMPONENTS: u32 = 1;
 
     /// Parameter sets the verification harness must cover, hardest corners included
     /// (the defaults are always covered).
@@ -363,6 +365,10 @@ pub trait LobeType: Send + Sync {
     fn params(&self) -> &[ParamSpec];
     fn flags(&self) -> u32;
     fn reciprocal(&self) -> bool;
+    /// How many components (sub-lobes) samples report ([`Model::COMPONENTS`]).
+    fn component_count(&self) -> u32 {
+        1
+    }
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32>;
 
     /// Length of this type's decoded parameter block.
@@ -552,6 +558,9 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn reciprocal(&self) -> bool {
         M::RECIPROCAL
+    }
+    fn component_count(&self) -> u32 {
+        M::COMPONENTS
     }
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         self.eval_decoded(&decoded::<M>(params), wo, wi, mode)

@@ -664,6 +664,14 @@ impl LobeType for PluginLobe {
     fn reciprocal(&self) -> bool {
         self.reciprocal
     }
+    fn component_count(&self) -> u32 {
+        match self.sample {
+            Sampler::V1(_) => 1,
+            Sampler::V2 {
+                component_count, ..
+            } => component_count,
+        }
+    }
 
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         let (mut value, mut pdf) = ([0.0f32; 3], 0.0f32);

@@ -258,7 +258,7 @@ fn chi2_and_consistency(
             }
             continue;
         }
-        if !sample_kind_ok(lobe.flags(), &s) {
+        if !sample_kind_ok(lobe.flags(), lobe.component_count(), &s) {
             report.flag_errors += 1;
         }
         if s.delta {
@@ -318,8 +318,8 @@ fn chi2_and_consistency(
 /// Whether a valid sample's flags are among its lobe type's `lobe_flags`, its class
 /// is SPECULAR exactly where it is a delta event (value a fraction, pdf a discrete
 /// probability) and otherwise the type's DIFFUSE or GLOSSY class, and its component
-/// is a whole number.
-fn sample_kind_ok(lobe_flags: u32, s: &Sample<f32>) -> bool {
+/// is a whole number below the type's component count.
+fn sample_kind_ok(lobe_flags: u32, components: u32, s: &Sample<f32>) -> bool {
     let class = s.class as u32;
     let class_ok = if s.delta {
         class == flags::SPECULAR
@@ -330,6 +330,7 @@ fn sample_kind_ok(lobe_flags: u32, s: &Sample<f32>) -> bool {
         && class as f32 == s.class
         && class_ok
         && s.component.fract() == 0.0
+        && s.component < components as f32
         && s.component >= 0.0
 }
 

@@ -22,6 +22,8 @@ pub struct MaterialLobe {
     registry: Registry,
     flags: u32,
     reciprocal: bool,
+    /// The most components a slot's lobe reports.
+    components: u32,
 }
 
 impl MaterialLobe {
@@ -32,6 +34,11 @@ impl MaterialLobe {
         let default = Material::new(&registry, type_id, None, 0.0)?;
         let flags = default.slots().iter().fold(0, |f, (_, l)| f | l.flags());
         let reciprocal = default.slots().iter().all(|(_, l)| l.reciprocal());
+        let components = default
+            .slots()
+            .iter()
+            .map(|(_, l)| l.component_count())
+            .fold(1, u32::max);
         Ok(MaterialLobe {
             name: format!("material {}", kind.name()),
             kind,
@@ -39,6 +46,7 @@ impl MaterialLobe {
             registry,
             flags,
             reciprocal,
+            components,
         })
     }
 
@@ -69,6 +77,9 @@ impl LobeType for MaterialLobe {
     }
     fn reciprocal(&self) -> bool {
         self.reciprocal
+    }
+    fn component_count(&self) -> u32 {
+        self.components
     }
     fn eval(&self, params: &[f32], wo: Vec3<f32>, wi: Vec3<f32>, mode: Transport) -> Eval<f32> {
         debug_assert_eq!(mode, Transport::Radiance);

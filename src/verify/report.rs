@@ -220,7 +220,7 @@ impl CaseReport {
         }
         if self.flag_errors > 0 {
             out.push(format!(
-                "consistency: {} samples with bad flags or failed-sample data",
+                "consistency: {} samples with bad flags, class or component, or failed-sample data",
                 self.flag_errors
             ));
         }
