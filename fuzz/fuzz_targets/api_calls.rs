@@ -805,6 +805,7 @@ fn lobe_info() -> glint_lobe_info {
         reciprocal: 0,
         param_count: 0,
         param_block_size: 0,
+        component_count: 0,
     }
 }
 
