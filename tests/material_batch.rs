@@ -489,3 +489,90 @@ fn slots_emitted_on_some_lanes_match_their_closures() {
         "{counts:?}"
     );
 }
+
+/// A material whose emitted slots are one of the fused shapes is evaluated by one
+/// kernel (`kernels::fused`) unless the reverse pdf is wanted, which takes the slots
+/// one by one: both give the same bits, value and pdf, and so does the pdf call, for
+/// each shape (every lobe, no clearcoat, no sheen, diffuse and specular, specular and
+/// clearcoat; slots emitted on some lanes only), over per-lane overrides, frames and
+/// inactive lanes, on every ISA.
+#[test]
+fn fused_evals_are_the_slot_by_slot_sums() {
+    use glint::params::ParamKind;
+    let shapes = [
+        r#"{"material": "disney", "sheen": 1, "clearcoat": 1, "subsurface": 0.5, "anisotropic": 0.4}"#,
+        r#"{"material": "disney", "sheen": 0.7, "clearcoat": 0}"#,
+        r#"{"material": "disney", "sheen": 0, "clearcoat": 0.8, "clearcoat_gloss": 0.3}"#,
+        r#"{"material": "disney", "sheen": 0, "clearcoat": 0, "roughness": 0.1}"#,
+        r#"{"material": "disney", "metallic": 1, "clearcoat": 1}"#,
+    ];
+    let registry = Registry::with_builtins();
+    let n = 203;
+    let mut rng = Rng::new(0xf05e);
+    for (s, description) in shapes.iter().enumerate() {
+        let material = glint::json::material_from_json(&registry, description, 0.001).unwrap();
+        let (normal, wo) = normals_and_views(&mut rng, n);
+        let tangent = rows(&tangents(&mut rng, n, 3));
+        let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
+        let (wo, wi, normal) = (rows(&wo), rows(&wi), rows(&normal));
+        let roughness: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
+        // Shape 1 with the clearcoat back on a third of the lanes: every lobe there.
+        let coat: Vec<f32> = (0..n)
+            .map(|i| if s == 1 { (i % 3 / 2) as f32 } else { 0.0 })
+            .collect();
+        let mut overrides = vec![material::OverrideLanes {
+            param: 5,
+            kind: ParamKind::Float,
+            value: [&roughness, &[], &[]],
+        }];
+        if s == 1 {
+            overrides.push(material::OverrideLanes {
+                param: 9,
+                kind: ParamKind::Float,
+                value: [&coat, &[], &[]],
+            });
+        }
+        let active: Vec<u8> = (0..n).map(|i| u8::from(i % 5 != 2)).collect();
+        let input = MaterialInput {
+            count: n,
+            material: &material,
+            active: Some(&active),
+            wo: soa(&wo),
+            normal: soa(&normal),
+            tangent: Some(soa(&tangent)),
+            overrides: &overrides,
+        };
+        for kernels in Kernels::available() {
+            let exec = Exec {
+                kernels,
+                threads: Threads::Caller,
+            };
+            let run = |reverse: bool| {
+                let mut value = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
+                let (mut pdf, mut pdf_reverse) = (vec![0.0f32; n], vec![0.0f32; n]);
+                let out = EvalOutput {
+                    value: soa_mut(&mut value),
+                    pdf: &mut pdf,
+                    pdf_reverse: reverse.then_some(&mut pdf_reverse[..]),
+                };
+                material::eval(&exec, &input, soa(&wi), out).unwrap();
+                (value, pdf)
+            };
+            let (fused, slot_by_slot) = (run(false), run(true));
+            let mut pdf_only = vec![0.0f32; n];
+            material::pdf(&exec, &input, soa(&wi), &mut pdf_only).unwrap();
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+            let what = format!("{description} on {}", kernels.isa().name());
+            for c in 0..3 {
+                assert_eq!(
+                    bits(&fused.0[c]),
+                    bits(&slot_by_slot.0[c]),
+                    "value {c}: {what}"
+                );
+            }
+            assert_eq!(bits(&fused.1), bits(&slot_by_slot.1), "pdf: {what}");
+            assert_eq!(bits(&pdf_only), bits(&slot_by_slot.1), "pdf call: {what}");
+            assert!(fused.1.iter().any(|&p| p > 0.0), "{what}");
+        }
+    }
+}

@@ -21,6 +21,7 @@ use super::{
 use crate::closure::SampleResult;
 use crate::error::{Error, Status};
 use crate::kernels::expand::ExpandJob;
+use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED};
 use crate::kernels::material_rows::{self, ChooseJob, SelectJob};
 use crate::kernels::{
     AlbedoJob, Directions, EvalJob, FinishJob, FinishLobe, LobeLanes, SampleJob, finish_mixture,
@@ -142,14 +143,25 @@ impl SlotRows {
 
     /// Slot `k`'s rows as the kernels read them.
     fn lanes(&self, k: usize, param_count: usize, len: usize) -> LobeLanes<'_> {
-        let p = k * MAX_PARAMS * len;
+        let rows = self.slot(k, param_count, len);
         LobeLanes::PerLane {
-            params: &self.params[p..p + param_count * len],
+            params: rows.params,
             param_count,
             frame: &self.frame[..9 * len],
+            weight: rows.weight,
+            probability: rows.probability,
+            stride: len,
+        }
+    }
+
+    /// Slot `k`'s own rows (the frame rows are every slot's).
+    fn slot(&self, k: usize, param_count: usize, len: usize) -> FusedRows<'_> {
+        let p = k * MAX_PARAMS * len;
+        FusedRows {
+            params: &self.params[p..p + param_count * len],
+            param_count,
             weight: &self.weight[k * 3 * len..(k + 1) * 3 * len],
             probability: &self.probability[k * len..(k + 1) * len],
-            stride: len,
         }
     }
 }
@@ -507,6 +519,12 @@ fn eval_chunk(
     } = s;
     let ([vr, vg, vb], pdf, pdf_reverse) =
         (rows3(value, len), grow(pdf, len), grow(pdf_reverse, len));
+    if !want_reverse {
+        let value = want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]);
+        if eval_fused(kernels, material, rows, len, [wo, wi], value, pdf) {
+            return;
+        }
+    }
     // The first live slot stores, the others add; without one, zeros.
     let mut first = true;
     for (k, (_, lobe)) in material.slots().iter().enumerate() {
@@ -544,6 +562,55 @@ fn eval_chunk(
             row.fill(0.0);
         }
     }
+}
+
+/// The live slots' evals in one kernel when their lobes, in order, are one of the
+/// fused shapes (`kernels::fused`: the sums `eval_chunk` adds up slot by slot, the same
+/// bits); false, and nothing written, when they are not.
+fn eval_fused(
+    kernels: Kernels,
+    material: &Material,
+    rows: &SlotRows,
+    len: usize,
+    [wo, wi]: [&[Vec<f32>; 3]; 2],
+    value: Option<[&mut [f32]; 3]>,
+    pdf: &mut [f32],
+) -> bool {
+    let empty = FusedRows {
+        params: &[],
+        param_count: 0,
+        weight: &[],
+        probability: &[],
+    };
+    let (mut models, mut slots, mut n) = ([None; MAX_FUSED], [empty; MAX_FUSED], 0);
+    for (k, (_, lobe)) in material.slots().iter().enumerate() {
+        if !rows.live[k] {
+            continue;
+        }
+        if n == MAX_FUSED {
+            return false;
+        }
+        models[n] = lobe.model();
+        slots[n] = rows.slot(k, lobe.lane_decoded_len(), len);
+        n += 1;
+    }
+    let Some(kernel) = fused::for_rows(&models[..n]) else {
+        return false;
+    };
+    kernel(
+        kernels,
+        &mut FusedRowsJob {
+            len,
+            mode: Transport::Radiance,
+            frame: &rows.frame[..9 * len],
+            wo: view3(wo, len),
+            wi: view3(wi, len),
+            slots,
+            value,
+            pdf: &mut pdf[..len],
+        },
+    );
+    true
 }
 
 /// `out[lane] = staged[j]`, 0 for failed lanes.

@@ -8,7 +8,7 @@
 //! the half vector) and the sums are stored once. The arithmetic is the unfused
 //! path's, operation for operation, so the outputs are the same bits.
 
-use super::{Directions, MAX_LOBE_PARAMS, direction, store};
+use super::{Directions, MAX_LOBE_PARAMS, direction, load_row3, store};
 use crate::closure::Closure;
 use crate::lobes::disney_clearcoat::DisneyClearcoat;
 use crate::lobes::disney_diffuse::DisneyDiffuse;
@@ -20,7 +20,7 @@ use crate::simd::{Kernels, kernel};
 use std::any::TypeId;
 
 /// Most lobes of a fused shape.
-const MAX_FUSED: usize = 4;
+pub const MAX_FUSED: usize = 4;
 
 /// One lobe of a fused job: its decoded block, weight and selection probability.
 #[derive(Clone, Copy)]
@@ -44,19 +44,27 @@ pub struct FusedEvalJob<'a> {
     pub pdf: &'a mut [f32],
 }
 
+/// A lobe's weight and selection probability over lanes.
+#[derive(Clone, Copy)]
+pub struct Term<L> {
+    pub weight: Rgb<L>,
+    pub probability: L,
+}
+
 /// A tuple of lobe models evaluated together.
 pub trait Shape: 'static {
     type Prepared<L: Lane>;
     /// Whether `models` are this shape's models, in order.
     fn matches(models: &[Option<TypeId>]) -> bool;
-    fn prepare<L: Lane>(lobes: &[FusedLobe<'_>; MAX_FUSED]) -> Self::Prepared<L>;
+    /// Each lobe's decoded block, in order.
+    fn prepare<L: Lane>(params: &[Params<'_, L>; MAX_FUSED]) -> Self::Prepared<L>;
     /// `(sum weight_k f_k, sum p_k pdf_k)` in lobe order at `(wo, wi)`. Without `own`
     /// as an eval sums (from the first lobe's terms, as lobe kernels store then add);
     /// with `own = (k, value, p pdf)`, a mixture at lobe `k`'s sample, whose own terms
     /// stand for lobe `k`'s, summed from zero as a mixture sample's rows are.
     fn sum<L: Lane>(
         p: &Self::Prepared<L>,
-        lobes: &[FusedLobe<'_>; MAX_FUSED],
+        terms: &[Term<L>; MAX_FUSED],
         own: Option<(usize, Rgb<L>, L)>,
         wo: Vec3<L>,
         wi: Vec3<L>,
@@ -68,15 +76,35 @@ pub trait Shape: 'static {
 #[inline(always)]
 fn weighted<M: Model, L: Lane>(
     p: &M::Prepared<L>,
-    lobe: &FusedLobe<'_>,
+    term: &Term<L>,
     wo: Vec3<L>,
     wi: Vec3<L>,
     mode: Transport,
 ) -> (Rgb<L>, L) {
     let e = M::eval(p, wo, wi, mode);
-    let w = lobe.weight;
-    let weight = Rgb::new(L::splat(w.r), L::splat(w.g), L::splat(w.b));
-    (weight * e.value, L::splat(lobe.probability) * e.pdf)
+    (term.weight * e.value, term.probability * e.pdf)
+}
+
+/// The lobes' blocks and terms, the same for every lane.
+#[inline(always)]
+fn uniform<'a, L: Lane>(
+    lobes: &[FusedLobe<'a>; MAX_FUSED],
+) -> ([Params<'a, L>; MAX_FUSED], [Term<L>; MAX_FUSED]) {
+    let mut params = [Params::shared(&[]); MAX_FUSED];
+    let mut terms = [Term {
+        weight: Rgb::zero(),
+        probability: L::zero(),
+    }; MAX_FUSED];
+    // A loop, not `array::map`: its closure would lose the kernel's target features.
+    for k in 0..MAX_FUSED {
+        let w = lobes[k].weight;
+        params[k] = Params::shared(lobes[k].params);
+        terms[k] = Term {
+            weight: Rgb::new(L::splat(w.r), L::splat(w.g), L::splat(w.b)),
+            probability: L::splat(lobes[k].probability),
+        };
+    }
+    (params, terms)
 }
 
 macro_rules! shape {
@@ -89,19 +117,19 @@ macro_rules! shape {
                     && models.iter().zip(shape).all(|(m, s)| *m == Some(s))
             }
             #[inline(always)]
-            fn prepare<L: Lane>(lobes: &[FusedLobe<'_>; MAX_FUSED]) -> Self::Prepared<L> {
-                let first = $first::prepare(Params::shared(lobes[0].params));
+            fn prepare<L: Lane>(params: &[Params<'_, L>; MAX_FUSED]) -> Self::Prepared<L> {
+                let first = $first::prepare(params[0]);
                 let mut k = 0;
                 (first, $({
                     k += 1;
-                    $m::prepare(Params::shared(lobes[k].params))
+                    $m::prepare(params[k])
                 },)*)
             }
             #[inline(always)]
             #[allow(non_snake_case)]
             fn sum<L: Lane>(
                 p: &Self::Prepared<L>,
-                lobes: &[FusedLobe<'_>; MAX_FUSED],
+                terms: &[Term<L>; MAX_FUSED],
                 own: Option<(usize, Rgb<L>, L)>,
                 wo: Vec3<L>,
                 wi: Vec3<L>,
@@ -110,7 +138,7 @@ macro_rules! shape {
                 let ($first, $($m,)*) = p;
                 let (v, q) = match own {
                     Some((0, v, q)) => (v, q),
-                    _ => weighted::<$first, L>($first, &lobes[0], wo, wi, mode),
+                    _ => weighted::<$first, L>($first, &terms[0], wo, wi, mode),
                 };
                 let (mut value, mut pdf) = match own {
                     Some(_) => (Rgb::zero() + v, L::zero() + q),
@@ -121,7 +149,7 @@ macro_rules! shape {
                     k += 1;
                     let (v, q) = match own {
                         Some((o, v, q)) if o == k => (v, q),
-                        _ => weighted::<$m, L>($m, &lobes[k], wo, wi, mode),
+                        _ => weighted::<$m, L>($m, &terms[k], wo, wi, mode),
                     };
                     value = value + v;
                     pdf += q;
@@ -136,10 +164,31 @@ shape!(A, B);
 shape!(A, B, C);
 shape!(A, B, C, D);
 
+/// The eval sums at world-space `(wo, wi)` in `frame`, stored to the `n` lanes at `i`.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn eval_into<S: Shape, L: Lane>(
+    p: &S::Prepared<L>,
+    terms: &[Term<L>; MAX_FUSED],
+    (frame, wo, wi, i, n): (&LaneFrame<L>, Vec3<L>, Vec3<L>, usize, usize),
+    mode: Transport,
+    value: &mut Option<[&mut [f32]; 3]>,
+    pdf: &mut [f32],
+) {
+    let (v, q) = S::sum(p, terms, None, frame.to_local(wo), frame.to_local(wi), mode);
+    if let Some(rows) = value {
+        for (v, row) in v.to_array().into_iter().zip(rows.iter_mut()) {
+            store(v, row, i, n);
+        }
+    }
+    store(q, pdf, i, n);
+}
+
 #[inline(always)]
 fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
     let len = job.pdf.len();
-    let p = S::prepare::<L>(&job.lobes);
+    let (params, terms) = uniform::<L>(&job.lobes);
+    let p = S::prepare::<L>(&params);
     let frame = LaneFrame::<L>::splat(&job.frame);
     let mut out_of_range = false;
     for i in (0..len).step_by(L::LANES) {
@@ -149,20 +198,8 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
         if out_of_range {
             return false;
         }
-        let (value, pdf) = S::sum(
-            &p,
-            &job.lobes,
-            None,
-            frame.to_local(wo),
-            frame.to_local(wi),
-            job.mode,
-        );
-        if let Some(rows) = &mut job.value {
-            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
-                store(v, row, i, n);
-            }
-        }
-        store(pdf, job.pdf, i, n);
+        let at = (&frame, wo, wi, i, n);
+        eval_into::<S, L>(&p, &terms, at, job.mode, &mut job.value, job.pdf);
     }
     true
 }
@@ -189,7 +226,8 @@ pub struct FusedMixtureJob<'a> {
 
 #[inline(always)]
 fn mixture_body<S: Shape, L: Lane>(job: &mut FusedMixtureJob<'_>) {
-    let p = S::prepare::<L>(&job.lobes);
+    let (params, terms) = uniform::<L>(&job.lobes);
+    let p = S::prepare::<L>(&params);
     let frame = LaneFrame::<L>::splat(&job.frame);
     let mut unused = false;
     for (own, run) in job.starts.windows(2).enumerate() {
@@ -205,7 +243,7 @@ fn mixture_body<S: Shape, L: Lane>(job: &mut FusedMixtureJob<'_>) {
             let own_pdf = probability * L::load(&job.own_pdf[i..]);
             let (value, pdf) = S::sum(
                 &p,
-                &job.lobes,
+                &terms,
                 Some((own, own_value, own_pdf)),
                 frame.to_local(wo),
                 frame.to_local(wi),
@@ -219,6 +257,82 @@ fn mixture_body<S: Shape, L: Lane>(job: &mut FusedMixtureJob<'_>) {
     }
 }
 
+/// One slot of a fused eval over a material batch's rows: its decoded blocks, weights
+/// and selection probabilities per lane (value `p` of lane `j` at `p * len + j`).
+#[derive(Clone, Copy)]
+pub struct FusedRows<'a> {
+    pub params: &'a [f32],
+    pub param_count: usize,
+    pub weight: &'a [f32],
+    pub probability: &'a [f32],
+}
+
+/// A fused eval over a material batch's staged rows (`len` a multiple of
+/// [`super::LANE_MULTIPLE`]): what each slot's eval kernel over
+/// `LobeLanes::PerLane` computes and adds, in one pass.
+pub struct FusedRowsJob<'a> {
+    pub len: usize,
+    pub mode: Transport,
+    /// Each lane's frame: tangent, bitangent, normal, component `c` of axis `a` of lane
+    /// `j` at `(3 a + c) len + j`.
+    pub frame: &'a [f32],
+    /// Unit, world space.
+    pub wo: [&'a [f32]; 3],
+    pub wi: [&'a [f32]; 3],
+    /// The emitted slots in order (as many as the shape has).
+    pub slots: [FusedRows<'a>; MAX_FUSED],
+    pub value: Option<[&'a mut [f32]; 3]>,
+    pub pdf: &'a mut [f32],
+}
+
+#[inline(always)]
+fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
+    let len = job.len;
+    let mut raw = [[L::zero(); MAX_LOBE_PARAMS]; MAX_FUSED];
+    let mut unused = false;
+    for i in (0..len).step_by(L::LANES) {
+        let mut terms = [Term {
+            weight: Rgb::zero(),
+            probability: L::zero(),
+        }; MAX_FUSED];
+        for k in 0..MAX_FUSED {
+            let slot = &job.slots[k];
+            if slot.weight.is_empty() {
+                continue;
+            }
+            for (p, r) in raw[k][..slot.param_count].iter_mut().enumerate() {
+                *r = L::load(&slot.params[p * len + i..]);
+            }
+            terms[k] = Term {
+                weight: Rgb::new(
+                    L::load(&slot.weight[i..]),
+                    L::load(&slot.weight[len + i..]),
+                    L::load(&slot.weight[2 * len + i..]),
+                ),
+                probability: L::load(&slot.probability[i..]),
+            };
+        }
+        let mut params = [Params::shared(&[]); MAX_FUSED];
+        for k in 0..MAX_FUSED {
+            params[k] = Params::new(&raw[k][..job.slots[k].param_count]);
+        }
+        let p = S::prepare::<L>(&params);
+        let frame = LaneFrame {
+            t: load_row3(job.frame, len, 0, i),
+            b: load_row3(job.frame, len, 1, i),
+            n: load_row3(job.frame, len, 2, i),
+        };
+        let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
+        let wi = direction(job.wi, i, L::LANES, Directions::Unit, &mut unused);
+        let at = (&frame, wo, wi, i, L::LANES);
+        eval_into::<S, L>(&p, &terms, at, job.mode, &mut job.value, job.pdf);
+    }
+}
+
+kernel!(
+    /// A fused shape's eval over a material batch's rows (`rows_body`).
+    rows<S: Shape>(job: &mut FusedRowsJob<'_>) => rows_body
+);
 kernel!(
     /// A fused shape's eval over a job's lanes (`eval_body`); false when some
     /// direction is outside [`Directions::Raw`]'s range (outputs incomplete).
@@ -233,6 +347,8 @@ kernel!(
 pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
 /// A fused mixture kernel.
 pub type FusedMixture = fn(Kernels, &mut FusedMixtureJob<'_>);
+/// A fused eval kernel over a material batch's rows.
+pub type FusedRowsEval = fn(Kernels, &mut FusedRowsJob<'_>);
 /// [`Shape::matches`] of a shape.
 type Matches = fn(&[Option<TypeId>]) -> bool;
 
@@ -247,17 +363,48 @@ type NoClearcoat = (Diffuse, Sheen, Specular);
 type NoSheen = (Diffuse, Specular, Clearcoat);
 type Plastic = (Diffuse, Specular);
 type Metal = (Specular, Clearcoat);
-const SHAPES: [(Matches, FusedEval, FusedMixture); 5] = [
-    (Every::matches, eval::<Every>, mixture::<Every>),
+const SHAPES: [(Matches, FusedEval, FusedMixture, FusedRowsEval); 5] = [
+    (
+        Every::matches,
+        eval::<Every>,
+        mixture::<Every>,
+        rows::<Every>,
+    ),
     (
         NoClearcoat::matches,
         eval::<NoClearcoat>,
         mixture::<NoClearcoat>,
+        rows::<NoClearcoat>,
     ),
-    (NoSheen::matches, eval::<NoSheen>, mixture::<NoSheen>),
-    (Plastic::matches, eval::<Plastic>, mixture::<Plastic>),
-    (Metal::matches, eval::<Metal>, mixture::<Metal>),
+    (
+        NoSheen::matches,
+        eval::<NoSheen>,
+        mixture::<NoSheen>,
+        rows::<NoSheen>,
+    ),
+    (
+        Plastic::matches,
+        eval::<Plastic>,
+        mixture::<Plastic>,
+        rows::<Plastic>,
+    ),
+    (
+        Metal::matches,
+        eval::<Metal>,
+        mixture::<Metal>,
+        rows::<Metal>,
+    ),
 ];
+
+/// The fused eval over rows of the slots whose built-in models are `models`, in order,
+/// when they are a shape.
+pub fn for_rows(models: &[Option<TypeId>]) -> Option<FusedRowsEval> {
+    if models.len() < 2 || models.len() > MAX_FUSED {
+        return None;
+    }
+    let &(.., rows) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
+    Some(rows)
+}
 
 /// The fused kernels of a closure's shape, and its lobes as their jobs take them.
 pub struct Fused<'a> {
@@ -277,7 +424,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
         *m = l.lobe.model();
     }
     let models = &models[..lobes.len()];
-    let &(_, eval, mixture) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
+    let &(_, eval, mixture, _) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
     let mut out = [FusedLobe {
         params: &[],
         weight: Rgb::new(0.0, 0.0, 0.0),
