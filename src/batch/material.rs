@@ -21,7 +21,7 @@ use super::{
 use crate::closure::SampleResult;
 use crate::error::{Error, Status};
 use crate::kernels::expand::ExpandJob;
-use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED};
+use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, OwnRows};
 use crate::kernels::material_rows::{self, ChooseJob, SelectJob};
 use crate::kernels::{
     AlbedoJob, Directions, EvalJob, FinishJob, FinishLobe, LobeLanes, SampleJob, finish_mixture,
@@ -521,7 +521,8 @@ fn eval_chunk(
         (rows3(value, len), grow(pdf, len), grow(pdf_reverse, len));
     if !want_reverse {
         let value = want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]);
-        if eval_fused(kernels, material, rows, len, [wo, wi], value, pdf) {
+        let directions = (&*wo, &*wi, Directions::Unit);
+        if eval_fused(kernels, material, rows, len, directions, None, value, pdf) {
             return;
         }
     }
@@ -566,13 +567,16 @@ fn eval_chunk(
 
 /// The live slots' evals in one kernel when their lobes, in order, are one of the
 /// fused shapes (`kernels::fused`: the sums `eval_chunk` adds up slot by slot, the same
-/// bits); false, and nothing written, when they are not.
+/// bits), or with `own = (chosen, value, p pdf)` a sample's mixture sums as
+/// `sample_chunk` adds them; false, and nothing written, when they are not.
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn eval_fused(
     kernels: Kernels,
     material: &Material,
     rows: &SlotRows,
     len: usize,
-    [wo, wi]: [&[Vec<f32>; 3]; 2],
+    (wo, wi, directions): (&[Vec<f32>; 3], &[Vec<f32>; 3], Directions),
+    own: Option<(&[f32], [&[f32]; 3], &[f32])>,
     value: Option<[&mut [f32]; 3]>,
     pdf: &mut [f32],
 ) -> bool {
@@ -583,6 +587,7 @@ fn eval_fused(
         probability: &[],
     };
     let (mut models, mut slots, mut n) = ([None; MAX_FUSED], [empty; MAX_FUSED], 0);
+    let mut indices = [0.0; MAX_FUSED];
     for (k, (_, lobe)) in material.slots().iter().enumerate() {
         if !rows.live[k] {
             continue;
@@ -592,6 +597,7 @@ fn eval_fused(
         }
         models[n] = lobe.model();
         slots[n] = rows.slot(k, lobe.lane_decoded_len(), len);
+        indices[n] = k as f32;
         n += 1;
     }
     let Some(kernel) = fused::for_rows(&models[..n]) else {
@@ -605,7 +611,14 @@ fn eval_fused(
             frame: &rows.frame[..9 * len],
             wo: view3(wo, len),
             wi: view3(wi, len),
+            directions,
             slots,
+            own: own.map(|(chosen, value, pdf)| OwnRows {
+                chosen: &chosen[..len],
+                slots: indices,
+                value,
+                pdf: &pdf[..len],
+            }),
             value,
             pdf: &mut pdf[..len],
         },
@@ -912,42 +925,61 @@ fn sample_chunk(
         &mut sample_pdf[..len],
     );
     // The mixture summed in slot order, as `Closure::sample` sums it: each slot
-    // evaluated on the lanes that chose another, then its own samples added.
+    // evaluated on the lanes that chose another, then its own samples added; in one
+    // kernel when the slots are a fused shape.
+    let own = (chosen, view3(sample_value, len), &sample_pdf[..len]);
+    let directions = (&*wo, &*wi, Directions::Sampled);
     let mut value = rows3(value, len);
-    for row in value.iter_mut() {
-        row.fill(0.0);
-    }
     let pdf = grow(pdf, len);
-    pdf.fill(0.0);
-    for (k, (_, lobe)) in slots.iter().enumerate() {
-        let slot = k as f32;
-        if rows.live[k] && picks[k] < n {
-            let [vr, vg, vb] = &mut value;
-            let mut job = EvalJob {
-                len,
-                mode: Transport::Radiance,
-                directions: Directions::Sampled,
-                wo: view3(wo, len),
-                wi: view3(wi, len),
-                lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-                store: false,
-                value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
-                pdf: &mut pdf[..],
-                except: Some((chosen, slot)),
-                out_of_range: false,
-            };
-            lobe.eval_lanes(kernels, &mut job);
+    let fused = {
+        let [vr, vg, vb] = &mut value;
+        let value = Some([&mut vr[..], &mut vg[..], &mut vb[..]]);
+        eval_fused(
+            kernels,
+            input.material,
+            rows,
+            len,
+            directions,
+            Some(own),
+            value,
+            pdf,
+        )
+    };
+    if !fused {
+        for row in value.iter_mut() {
+            row.fill(0.0);
         }
-        if picks[k] > 0 {
-            material_rows::add_own(
-                kernels,
-                slot,
-                chosen,
-                view3(sample_value, len),
-                &sample_pdf[..len],
-                &mut value,
-                pdf,
-            );
+        pdf.fill(0.0);
+        for (k, (_, lobe)) in slots.iter().enumerate() {
+            let slot = k as f32;
+            if rows.live[k] && picks[k] < n {
+                let [vr, vg, vb] = &mut value;
+                let mut job = EvalJob {
+                    len,
+                    mode: Transport::Radiance,
+                    directions: Directions::Sampled,
+                    wo: view3(wo, len),
+                    wi: view3(wi, len),
+                    lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
+                    store: false,
+                    value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
+                    pdf: &mut pdf[..],
+                    except: Some((chosen, slot)),
+                    out_of_range: false,
+                };
+                lobe.eval_lanes(kernels, &mut job);
+            }
+            if picks[k] > 0 {
+                material_rows::add_own(
+                    kernels,
+                    slot,
+                    chosen,
+                    view3(sample_value, len),
+                    &sample_pdf[..len],
+                    &mut value,
+                    pdf,
+                );
+            }
         }
     }
     // `sample_pdf` holds `p_k pdf_k` now: the chosen slot's probability is 1 below.

@@ -70,6 +70,19 @@ pub trait Shape: 'static {
         wi: Vec3<L>,
         mode: Transport,
     ) -> (Rgb<L>, L);
+    /// A mixture at each lane's own sample: lobe `k`'s terms stand where `chosen`
+    /// equals `slots[k]`, the others are evaluated; summed from zero in lobe order.
+    #[allow(clippy::too_many_arguments)]
+    fn sum_per_lane<L: Lane>(
+        p: &Self::Prepared<L>,
+        terms: &[Term<L>; MAX_FUSED],
+        chosen: (L, &[f32; MAX_FUSED]),
+        own_value: Rgb<L>,
+        own_pdf: L,
+        wo: Vec3<L>,
+        wi: Vec3<L>,
+        mode: Transport,
+    ) -> (Rgb<L>, L);
 }
 
 /// `weight f` and `p pdf` of one lobe, as the eval kernel computes them.
@@ -153,6 +166,33 @@ macro_rules! shape {
                     };
                     value = value + v;
                     pdf += q;
+                )*
+                (value, pdf)
+            }
+            #[inline(always)]
+            #[allow(non_snake_case)]
+            fn sum_per_lane<L: Lane>(
+                p: &Self::Prepared<L>,
+                terms: &[Term<L>; MAX_FUSED],
+                (chosen, slots): (L, &[f32; MAX_FUSED]),
+                own_value: Rgb<L>,
+                own_pdf: L,
+                wo: Vec3<L>,
+                wi: Vec3<L>,
+                mode: Transport,
+            ) -> (Rgb<L>, L) {
+                let ($first, $($m,)*) = p;
+                let mine = chosen.eq(L::splat(slots[0]));
+                let (v, q) = weighted::<$first, L>($first, &terms[0], wo, wi, mode);
+                let mut value = Rgb::zero() + Rgb::select(mine, own_value, v);
+                let mut pdf = L::zero() + L::select(mine, own_pdf, q);
+                let mut k = 0;
+                $(
+                    k += 1;
+                    let mine = chosen.eq(L::splat(slots[k]));
+                    let (v, q) = weighted::<$m, L>($m, &terms[k], wo, wi, mode);
+                    value = value + Rgb::select(mine, own_value, v);
+                    pdf += L::select(mine, own_pdf, q);
                 )*
                 (value, pdf)
             }
@@ -276,13 +316,25 @@ pub struct FusedRowsJob<'a> {
     /// Each lane's frame: tangent, bitangent, normal, component `c` of axis `a` of lane
     /// `j` at `(3 a + c) len + j`.
     pub frame: &'a [f32],
-    /// Unit, world space.
+    /// World space: `wo` unit, `wi` as `directions` says.
     pub wo: [&'a [f32]; 3],
     pub wi: [&'a [f32]; 3],
+    pub directions: Directions,
     /// The emitted slots in order (as many as the shape has).
     pub slots: [FusedRows<'a>; MAX_FUSED],
+    /// A mixture sample's own terms: each lane's chosen slot, the slot index of each
+    /// lobe of the shape, and the chosen slot's weighted value and `p pdf`.
+    pub own: Option<OwnRows<'a>>,
     pub value: Option<[&'a mut [f32]; 3]>,
     pub pdf: &'a mut [f32],
+}
+
+/// The own terms of a material batch's samples ([`FusedRowsJob::own`]).
+pub struct OwnRows<'a> {
+    pub chosen: &'a [f32],
+    pub slots: [f32; MAX_FUSED],
+    pub value: [&'a [f32]; 3],
+    pub pdf: &'a [f32],
 }
 
 #[inline(always)]
@@ -323,9 +375,33 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
             n: load_row3(job.frame, len, 2, i),
         };
         let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
-        let wi = direction(job.wi, i, L::LANES, Directions::Unit, &mut unused);
-        let at = (&frame, wo, wi, i, L::LANES);
-        eval_into::<S, L>(&p, &terms, at, job.mode, &mut job.value, job.pdf);
+        let wi = direction(job.wi, i, L::LANES, job.directions, &mut unused);
+        let Some(own) = &job.own else {
+            let at = (&frame, wo, wi, i, L::LANES);
+            eval_into::<S, L>(&p, &terms, at, job.mode, &mut job.value, job.pdf);
+            continue;
+        };
+        let own_value = Rgb::new(
+            L::load(&own.value[0][i..]),
+            L::load(&own.value[1][i..]),
+            L::load(&own.value[2][i..]),
+        );
+        let (value, pdf) = S::sum_per_lane(
+            &p,
+            &terms,
+            (L::load(&own.chosen[i..]), &own.slots),
+            own_value,
+            L::load(&own.pdf[i..]),
+            frame.to_local(wo),
+            frame.to_local(wi),
+            job.mode,
+        );
+        if let Some(rows) = &mut job.value {
+            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
+                v.store(&mut row[i..]);
+            }
+        }
+        pdf.store(&mut job.pdf[i..]);
     }
 }
 
