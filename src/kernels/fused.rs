@@ -51,6 +51,17 @@ pub struct Term<L> {
     pub probability: L,
 }
 
+impl<L: Lane> Term<L> {
+    /// No weight (lobes a shape does not have).
+    #[inline(always)]
+    fn zero() -> Self {
+        Term {
+            weight: Rgb::zero(),
+            probability: L::zero(),
+        }
+    }
+}
+
 /// A tuple of lobe models evaluated together.
 pub trait Shape: 'static {
     type Prepared<L: Lane>;
@@ -104,10 +115,7 @@ fn uniform<'a, L: Lane>(
     lobes: &[FusedLobe<'a>; MAX_FUSED],
 ) -> ([Params<'a, L>; MAX_FUSED], [Term<L>; MAX_FUSED]) {
     let mut params = [Params::shared(&[]); MAX_FUSED];
-    let mut terms = [Term {
-        weight: Rgb::zero(),
-        probability: L::zero(),
-    }; MAX_FUSED];
+    let mut terms = [Term::zero(); MAX_FUSED];
     // A loop, not `array::map`: its closure would lose the kernel's target features.
     for k in 0..MAX_FUSED {
         let w = lobes[k].weight;
@@ -204,18 +212,15 @@ shape!(A, B);
 shape!(A, B, C);
 shape!(A, B, C, D);
 
-/// The eval sums at world-space `(wo, wi)` in `frame`, stored to the `n` lanes at `i`.
+/// Sums `(value, pdf)` stored to the `n` lanes at `i` (value only when wanted).
 #[inline(always)]
-#[allow(clippy::type_complexity)]
-fn eval_into<S: Shape, L: Lane>(
-    p: &S::Prepared<L>,
-    terms: &[Term<L>; MAX_FUSED],
-    (frame, wo, wi, i, n): (&LaneFrame<L>, Vec3<L>, Vec3<L>, usize, usize),
-    mode: Transport,
+fn store_sums<L: Lane>(
+    (v, q): (Rgb<L>, L),
     value: &mut Option<[&mut [f32]; 3]>,
     pdf: &mut [f32],
+    i: usize,
+    n: usize,
 ) {
-    let (v, q) = S::sum(p, terms, None, frame.to_local(wo), frame.to_local(wi), mode);
     if let Some(rows) = value {
         for (v, row) in v.to_array().into_iter().zip(rows.iter_mut()) {
             store(v, row, i, n);
@@ -238,8 +243,15 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
         if out_of_range {
             return false;
         }
-        let at = (&frame, wo, wi, i, n);
-        eval_into::<S, L>(&p, &terms, at, job.mode, &mut job.value, job.pdf);
+        let sums = S::sum(
+            &p,
+            &terms,
+            None,
+            frame.to_local(wo),
+            frame.to_local(wi),
+            job.mode,
+        );
+        store_sums(sums, &mut job.value, job.pdf, i, n);
     }
     true
 }
@@ -343,10 +355,7 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
     let mut raw = [[L::zero(); MAX_LOBE_PARAMS]; MAX_FUSED];
     let mut unused = false;
     for i in (0..len).step_by(L::LANES) {
-        let mut terms = [Term {
-            weight: Rgb::zero(),
-            probability: L::zero(),
-        }; MAX_FUSED];
+        let mut terms = [Term::zero(); MAX_FUSED];
         for k in 0..MAX_FUSED {
             let slot = &job.slots[k];
             if slot.weight.is_empty() {
@@ -376,32 +385,21 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
         };
         let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
         let wi = direction(job.wi, i, L::LANES, job.directions, &mut unused);
-        let Some(own) = &job.own else {
-            let at = (&frame, wo, wi, i, L::LANES);
-            eval_into::<S, L>(&p, &terms, at, job.mode, &mut job.value, job.pdf);
-            continue;
-        };
-        let own_value = Rgb::new(
-            L::load(&own.value[0][i..]),
-            L::load(&own.value[1][i..]),
-            L::load(&own.value[2][i..]),
-        );
-        let (value, pdf) = S::sum_per_lane(
-            &p,
-            &terms,
-            (L::load(&own.chosen[i..]), &own.slots),
-            own_value,
-            L::load(&own.pdf[i..]),
-            frame.to_local(wo),
-            frame.to_local(wi),
-            job.mode,
-        );
-        if let Some(rows) = &mut job.value {
-            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
-                v.store(&mut row[i..]);
+        let (wo, wi) = (frame.to_local(wo), frame.to_local(wi));
+        let sums = match &job.own {
+            None => S::sum(&p, &terms, None, wo, wi, job.mode),
+            Some(own) => {
+                let own_value = Rgb::new(
+                    L::load(&own.value[0][i..]),
+                    L::load(&own.value[1][i..]),
+                    L::load(&own.value[2][i..]),
+                );
+                let chosen = (L::load(&own.chosen[i..]), &own.slots);
+                let own_pdf = L::load(&own.pdf[i..]);
+                S::sum_per_lane(&p, &terms, chosen, own_value, own_pdf, wo, wi, job.mode)
             }
-        }
-        pdf.store(&mut job.pdf[i..]);
+        };
+        store_sums(sums, &mut job.value, job.pdf, i, L::LANES);
     }
 }
 
