@@ -271,6 +271,12 @@ pub fn same_choices(specs: &[ParamSpec], a: &[f32], b: &[f32]) -> bool {
     enum_offsets(specs).all(|at| a[at] == b[at])
 }
 
+/// Whether the schema has enumerated values (their choices are part of a closure's
+/// shape).
+pub fn has_choices(specs: &[ParamSpec]) -> bool {
+    enum_offsets(specs).next().is_some()
+}
+
 /// Call `f` with each enumerated choice of `block`, in schema order.
 pub fn for_each_choice(specs: &[ParamSpec], block: &[f32], mut f: impl FnMut(u32)) {
     for at in enum_offsets(specs) {

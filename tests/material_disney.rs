@@ -285,6 +285,51 @@ fn only_contributing_lobes_are_emitted() {
     );
 }
 
+/// A material closure's shape id (looked up per set of emitted slots) is the one a
+/// closure of the same lobes built lobe by lobe gets, for every subset of the slots the
+/// pruning and the parameters leave.
+#[test]
+fn shape_ids_are_those_of_the_same_lobes_added_one_by_one() {
+    let registry = registry();
+    let mut rng = Rng::new(41);
+    let mut seen = std::collections::HashSet::new();
+    for i in 0..400 {
+        let mut d = Disney::random(&mut rng);
+        // Some materials without sheen, clearcoat or diffuse.
+        for (bit, value) in [
+            (1, &mut d.sheen),
+            (2, &mut d.clearcoat),
+            (4, &mut d.metallic),
+        ] {
+            if i & bit != 0 {
+                *value = if bit == 4 { 1.0 } else { 0.0 };
+            }
+        }
+        let prune = [0.0, 0.02, 0.2][i % 3];
+        let ctx = ShadingContext::new(direction(&mut rng), Frame::IDENTITY);
+        let built = material(&registry, &d, prune).closure(&ctx, &[]).unwrap();
+        let mut by_hand =
+            glint::closure::Closure::new(Some(ctx.wo), glint::lobes::Transport::Radiance);
+        for (k, l) in built.lobes().iter().enumerate() {
+            let w = l.weight;
+            by_hand
+                .add_lobe(
+                    &registry,
+                    l.type_id,
+                    [w.r, w.g, w.b],
+                    l.frame,
+                    Some(built.lobe_params(k)),
+                )
+                .unwrap();
+        }
+        by_hand.finish().unwrap();
+        assert_eq!(built.shape_id(), by_hand.shape_id(), "case {i}: {d:?}");
+        assert!(built.same_shape(&by_hand));
+        seen.insert(built.lobes().len());
+    }
+    assert_eq!(seen.len(), 4, "lobe counts covered: {seen:?}");
+}
+
 /// Directional albedo of the reference (f64): the smooth diffuse and sheen term by a
 /// midpoint rule over directions, the specular and clearcoat terms in slope space
 /// (`reference::slope_space_albedo`, stretched by the specular's alphas and, for

@@ -257,36 +257,82 @@ impl Closure {
         frame: Frame,
         params: Option<&[f32]>,
     ) -> Result<usize, Error> {
+        let size = params::block_size(lobe.params());
+        let decoded_size = lobe.decoded_len();
+        self.make_room(size, decoded_size)?;
+        let start = self.values.len();
+        self.values.resize(start + size + decoded_size, 0.0);
+        let (block, decoded) = self.values[start..].split_at_mut(size);
+        match params {
+            Some(values) => block.copy_from_slice(values),
+            None => params::write_defaults(lobe.params(), block),
+        }
+        lobe.decode(block, decoded);
+        if let Some(wo) = self.wo {
+            lobe.bake(decoded, frame.to_local(wo), self.mode);
+        }
+        Ok(self.record_lobe(lobe, type_id, weight, frame, start, size, decoded_size))
+    }
+
+    /// [`Self::push_lobe`] of a block already decoded (and baked at the closure's `wo`):
+    /// a material decodes its slots to prune them before adding them.
+    pub(crate) fn push_decoded(
+        &mut self,
+        lobe: &LobeRef,
+        type_id: u32,
+        weight: Rgb<f32>,
+        frame: Frame,
+        block: &[f32],
+        decoded: &[f32],
+    ) -> Result<usize, Error> {
+        self.make_room(block.len(), decoded.len())?;
+        let start = self.values.len();
+        self.values.extend_from_slice(block);
+        self.values.extend_from_slice(decoded);
+        Ok(self.record_lobe(
+            lobe,
+            type_id,
+            weight,
+            frame,
+            start,
+            block.len(),
+            decoded.len(),
+        ))
+    }
+
+    /// Room for one more lobe whose raw and decoded blocks take `size` and
+    /// `decoded_size` values.
+    fn make_room(&mut self, size: usize, decoded_size: usize) -> Result<(), Error> {
         if self.lobe_count() == MAX_LOBES {
             return Err(Error::new(
                 Status::ClosureFull,
                 format!("a closure holds at most {MAX_LOBES} lobes"),
             ));
         }
-        let specs = lobe.params();
-        let size = params::block_size(specs);
         if self.params_len + size > MAX_PARAM_VALUES {
             return Err(Error::new(
                 Status::ClosureFull,
                 format!("the closure's lobes hold at most {MAX_PARAM_VALUES} parameter values"),
             ));
         }
-        let decoded_size = lobe.decoded_len();
         self.lobes.try_reserve(1).map_err(|_| out_of_memory())?;
-        let start = self.values.len();
         self.values
             .try_reserve(size + decoded_size)
-            .map_err(|_| out_of_memory())?;
-        self.values.resize(start + size + decoded_size, 0.0);
-        let (block, decoded) = self.values[start..].split_at_mut(size);
-        match params {
-            Some(values) => block.copy_from_slice(values),
-            None => params::write_defaults(specs, block),
-        }
-        lobe.decode(block, decoded);
-        if let Some(wo) = self.wo {
-            lobe.bake(decoded, frame.to_local(wo), self.mode);
-        }
+            .map_err(|_| out_of_memory())
+    }
+
+    /// The lobe whose blocks were appended at `start`; returns its index.
+    #[allow(clippy::too_many_arguments)]
+    fn record_lobe(
+        &mut self,
+        lobe: &LobeRef,
+        type_id: u32,
+        weight: Rgb<f32>,
+        frame: Frame,
+        start: usize,
+        size: usize,
+        decoded_size: usize,
+    ) -> usize {
         self.lobes.push(LobeInstance {
             lobe: lobe.clone(),
             type_id,
@@ -299,15 +345,7 @@ impl Closure {
             probability: 0.0,
         });
         self.params_len += size;
-        Ok(self.lobe_count() - 1)
-    }
-
-    /// Remove the last lobe added (a material's lobe that the pruning rule drops).
-    pub(crate) fn pop_lobe(&mut self) {
-        if let Some(l) = self.lobes.pop() {
-            self.values.truncate(l.params_start as usize);
-            self.params_len -= l.params_len as usize;
-        }
+        self.lobe_count() - 1
     }
 
     /// Fix the lobe selection probabilities; the closure is immutable afterwards.
@@ -326,13 +364,17 @@ impl Closure {
                 shares[k] = (l.weight * albedo).luminance();
             }
         }
-        self.finish_with_shares(&shares[..n])
+        self.finish_with_shares(&shares[..n], None)
     }
 
     /// [`Self::finish`] with each lobe's `luminance(weight * albedo(wo))` (albedo
-    /// estimates) already known
-    /// (a material computes them to prune its lobes).
-    pub(crate) fn finish_with_shares(&mut self, shares: &[f32]) -> Result<(), Error> {
+    /// estimates) already known (a material computes them to prune its lobes), and
+    /// the shape id when known (a material's, per set of emitted slots).
+    pub(crate) fn finish_with_shares(
+        &mut self,
+        shares: &[f32],
+        shape_id: Option<u64>,
+    ) -> Result<(), Error> {
         if self.finished {
             return Err(Error::new(
                 Status::InvalidState,
@@ -343,7 +385,8 @@ impl Closure {
         for (lobe, p) in self.lobes.iter_mut().zip(probabilities) {
             lobe.probability = p;
         }
-        self.shape_id = self.hash_shape();
+        self.shape_id = shape_id.unwrap_or_else(|| self.hash_shape());
+        debug_assert_eq!(self.shape_id, self.hash_shape());
         self.finished = true;
         Ok(())
     }

@@ -190,17 +190,19 @@ pub(crate) fn shading_context(c: &glint_shading_context) -> Result<ShadingContex
     })
 }
 
-/// Checked overrides.
+/// `block` started by the material's values, with the caller's overrides applied.
 ///
 /// # Safety
 /// `overrides` is NULL or valid for `count` entries.
-pub(crate) unsafe fn overrides_in(
+pub(crate) unsafe fn apply_overrides(
+    m: &Material,
     overrides: *const glint_override,
     count: usize,
-    out: &mut [Override; MAX_MATERIAL_PARAMS],
-) -> Result<usize, Error> {
+    block: &mut [f32],
+) -> Result<(), Error> {
+    block.copy_from_slice(m.params());
     if count == 0 {
-        return Ok(0);
+        return Ok(());
     }
     if overrides.is_null() {
         return Err(null("overrides (with override_count > 0)"));
@@ -215,14 +217,15 @@ pub(crate) unsafe fn overrides_in(
     }
     // SAFETY: non-NULL and `count` entries per the contract.
     let given = unsafe { std::slice::from_raw_parts(overrides, count) };
-    for (i, (o, out)) in given.iter().zip(out.iter_mut()).enumerate() {
-        *out = Override {
+    for (i, o) in given.iter().enumerate() {
+        let o = Override {
             param: o.param,
             kind: param_kind(o.param_type, i)?,
             value: o.value,
         };
+        m.apply_one(i, &o, block)?;
     }
-    Ok(count)
+    Ok(())
 }
 
 /// Number of material types; their ids are `0 .. count - 1`.
@@ -465,10 +468,8 @@ pub unsafe extern "C" fn glint_material_closure(
         let ctx = shading_context(unsafe { deref(context, "context") }?)?;
         let mut block = [0.0f32; MAX_MATERIAL_PARAMS];
         let block = &mut block[..m.params().len()];
-        let mut list = [Override::NONE; MAX_MATERIAL_PARAMS];
         // SAFETY: per the contract.
-        let n = unsafe { overrides_in(overrides, override_count, &mut list) }?;
-        m.apply(&list[..n], block)?;
+        unsafe { apply_overrides(m, overrides, override_count, block) }?;
         // SAFETY: per the contract.
         unsafe {
             place_built(runtime, arena, out, |closure| {

@@ -2,11 +2,11 @@
 //! lobe types, resolved once per scene material; per shading point, overrides,
 //! expansion, pruning and the closure.
 
-use super::{MAX_SLOT_PARAMS, MaterialType, ShadingContext};
+use super::{MAX_SLOT_PARAMS, MAX_SLOTS, MaterialType, ShadingContext};
 use crate::closure::{Closure, MAX_LOBES};
 use crate::error::{Error, Status};
-use crate::lobes::Transport;
-use crate::math::Rgb;
+use crate::lobes::{MAX_DECODED_LEN, Transport};
+use crate::math::{Frame, Rgb, Vec3};
 use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::{LobeRef, Registry};
 
@@ -23,15 +23,6 @@ pub struct Override {
     pub value: [f32; 3],
 }
 
-impl Override {
-    /// A placeholder (parameter 0 set to 0), for arrays filled later.
-    pub const NONE: Override = Override {
-        param: 0,
-        kind: ParamKind::Float,
-        value: [0.0; 3],
-    };
-}
-
 /// A material ready to shade: validated and resolved once.
 #[derive(Clone)]
 pub struct Material {
@@ -43,6 +34,12 @@ pub struct Material {
     entries: Box<[Option<params::Slot<'static>>]>,
     /// Each slot's lobe type id and type.
     slots: Vec<(u32, LobeRef)>,
+    /// Each slot's raw block length.
+    block_lens: [usize; MAX_SLOTS],
+    /// The shape id of a closure of this material alone, by the set of emitted slots
+    /// (bit `k` for slot `k`); empty when a slot's type has enumerated parameters,
+    /// whose choices are part of the shape.
+    shape_ids: Box<[u64]>,
     prune: f32,
 }
 
@@ -81,11 +78,14 @@ impl Material {
             .map(|name| {
                 let id = registry.find(name)?;
                 let lobe = registry.get(id)?.clone();
-                if params::block_size(lobe.params()) > MAX_SLOT_PARAMS {
+                if params::block_size(lobe.params()) > MAX_SLOT_PARAMS
+                    || lobe.decoded_len() > MAX_DECODED_LEN
+                {
                     return Err(Error::new(
                         Status::Unsupported,
                         format!(
-                            "material {}: lobe type {name} has more than {MAX_SLOT_PARAMS} parameter values",
+                            "material {}: lobe type {name} has more than {MAX_SLOT_PARAMS} parameter values \
+                             or {MAX_DECODED_LEN} decoded values",
                             kind.name()
                         ),
                     ));
@@ -96,12 +96,19 @@ impl Material {
         let entries = (0..specs.len() as u32)
             .map(|i| params::locate(kind.name(), kind.params(), i, &"").ok())
             .collect();
+        let mut block_lens = [0; MAX_SLOTS];
+        for (len, (_, lobe)) in block_lens.iter_mut().zip(&slots) {
+            *len = params::block_size(lobe.params());
+        }
+        let shape_ids = shape_ids(&slots)?;
         Ok(Material {
             kind,
             type_id,
             params: block,
             entries,
             slots,
+            block_lens,
+            shape_ids,
             prune,
         })
     }
@@ -136,11 +143,25 @@ impl Material {
     pub fn apply(&self, overrides: &[Override], out: &mut [f32]) -> Result<(), Error> {
         out.copy_from_slice(&self.params);
         for (i, o) in overrides.iter().enumerate() {
-            let slot = self.override_slot(i, o.param, o.kind)?;
-            let value = &o.value[..o.kind.size()];
-            self.check_element(i, slot.spec, value, slot.element)?;
-            out[slot.offset..slot.offset + value.len()].copy_from_slice(value);
+            self.apply_one(i, o, out)?;
         }
+        Ok(())
+    }
+
+    /// Override `i` applied to `out`, a block [`Self::apply`] started.
+    pub fn apply_one(&self, i: usize, o: &Override, out: &mut [f32]) -> Result<(), Error> {
+        let slot = self.override_slot(i, o.param, o.kind)?;
+        let value = &o.value[..o.kind.size()];
+        let spec = slot.spec;
+        // In range (NaN is not): the common case, without the checks' messages.
+        let plain = spec.kind != ParamKind::Enum
+            && value
+                .iter()
+                .all(|&v| v >= spec.min && v <= spec.max && v.abs() <= f32::MAX);
+        if !plain {
+            self.check_element(i, spec, value, slot.element)?;
+        }
+        out[slot.offset..slot.offset + value.len()].copy_from_slice(value);
         Ok(())
     }
 
@@ -241,67 +262,68 @@ impl Material {
         block: &[f32],
     ) -> Result<(), Error> {
         closure.restart(Some(ctx.wo), Transport::Radiance);
-        let (shares, kept) = self.emit(closure, ctx, block, Rgb::new(1.0, 1.0, 1.0))?;
-        closure.finish_with_shares(&shares[..kept])
+        let (shares, emitted) = self.emit(closure, ctx, block, Rgb::new(1.0, 1.0, 1.0))?;
+        let kept = emitted.count_ones() as usize;
+        let shape_id = self.shape_ids.get(emitted as usize).copied();
+        closure.finish_with_shares(&shares[..kept], shape_id)
     }
 
     /// Add the lobes of one shading point (`block`: the parameters with its overrides
-    /// applied) to the open `closure`, their weights
-    /// scaled by `scale`: expansion, then pruning. Returns each added lobe's
-    /// `luminance(weight * albedo(wo))` with its albedo estimate, as `Closure::finish`
-    /// would compute it, and
-    /// how many were added (at least one: when every lobe is below the threshold, the
-    /// strongest is kept).
+    /// applied) to the open `closure`, their weights scaled by `scale`: expansion, then
+    /// pruning. Returns each added lobe's `luminance(weight * albedo(wo))` with its
+    /// albedo estimate, as `Closure::finish` would compute it, and the set of emitted
+    /// slots (bit `k` for slot `k`; at least one: when every lobe is below the
+    /// threshold, the strongest is kept).
     pub(crate) fn emit(
         &self,
         closure: &mut Closure,
         ctx: &ShadingContext,
         block: &[f32],
         scale: Rgb<f32>,
-    ) -> Result<([f32; MAX_LOBES], usize), Error> {
+    ) -> Result<([f32; MAX_LOBES], u32), Error> {
         let local = ctx.lanes();
         let e = self.kind.expand(block, &local);
-        let first = closure.lobes().len();
+        // Blocks are baked at the closure's `wo` (as `push_lobe` does); estimates
+        // are at the context's.
+        let bake_wo = closure.view().map(|wo| ctx.frame.to_local(wo));
         let mut shares = [0.0f32; MAX_LOBES];
-        let mut kept = 0;
+        let mut emitted = 0u32;
         // The strongest pruned slot, kept when every slot is pruned.
         let mut strongest: Option<(f32, usize)> = None;
-        let push = |closure: &mut Closure, k: usize| {
-            let (type_id, lobe) = &self.slots[k];
-            let block = &e.params[k][..params::block_size(lobe.params())];
-            debug_assert!(params::validate(lobe.name(), lobe.params(), block).is_ok());
-            closure.push_lobe(lobe, *type_id, scale * e.weight[k], ctx.frame, Some(block))
-        };
+        let mut decoded = [0.0f32; MAX_DECODED_LEN];
         for k in 0..self.slots.len() {
             let weight = scale * e.weight[k];
             if !(weight.r > 0.0 || weight.g > 0.0 || weight.b > 0.0) {
                 continue;
             }
-            let at = push(closure, k)?;
-            let lobe = &self.slots[k].1;
-            let albedo = lobe.albedo_estimate_decoded(
-                closure.lobe_decoded(at),
-                local.wo,
-                closure.transport(),
-            );
+            let (type_id, lobe) = &self.slots[k];
+            let raw = &e.params[k][..self.block_lens[k]];
+            debug_assert!(params::validate(lobe.name(), lobe.params(), raw).is_ok());
+            let decoded = &mut decoded[..lobe.decoded_len()];
+            lobe.decode(raw, decoded);
+            if let Some(wo) = bake_wo {
+                lobe.bake(decoded, wo, closure.transport());
+            }
+            let albedo = lobe.albedo_estimate_decoded(decoded, local.wo, closure.transport());
             let share = (weight * albedo).luminance();
             if share < self.prune {
-                closure.pop_lobe();
                 if strongest.is_none_or(|(s, _)| share > s) {
                     strongest = Some((share, k));
                 }
                 continue;
             }
-            shares[kept] = share;
-            kept += 1;
+            closure.push_decoded(lobe, *type_id, weight, ctx.frame, raw, decoded)?;
+            shares[emitted.count_ones() as usize] = share;
+            emitted |= 1 << k;
         }
-        if let (0, Some((share, k))) = (kept, strongest) {
-            push(closure, k)?;
+        if let (0, Some((share, k))) = (emitted, strongest) {
+            let (type_id, lobe) = &self.slots[k];
+            let raw = &e.params[k][..self.block_lens[k]];
+            closure.push_lobe(lobe, *type_id, scale * e.weight[k], ctx.frame, Some(raw))?;
             shares[0] = share;
-            kept = 1;
+            emitted = 1 << k;
         }
-        debug_assert_eq!(closure.lobes().len(), first + kept);
-        Ok((shares, kept))
+        Ok((shares, emitted))
     }
 
     /// The closure of one shading point, as a new value.
@@ -310,6 +332,27 @@ impl Material {
         self.build_closure(&mut closure, ctx, overrides)?;
         Ok(closure)
     }
+}
+
+/// [`Material::shape_ids`] of `slots`: each set's closure built once (with the
+/// slots' default blocks) and its shape id read.
+fn shape_ids(slots: &[(u32, LobeRef)]) -> Result<Box<[u64]>, Error> {
+    if slots.iter().any(|(_, l)| params::has_choices(l.params())) {
+        return Ok(Box::new([]));
+    }
+    (0..1u32 << slots.len())
+        .map(|set| {
+            let mut closure = Closure::new(None, Transport::Radiance);
+            for (k, (type_id, lobe)) in slots.iter().enumerate() {
+                if set & 1 << k != 0 {
+                    let frame = Frame::new(Vec3::new(0.0, 0.0, 1.0), None);
+                    closure.push_lobe(lobe, *type_id, Rgb::new(1.0, 1.0, 1.0), frame, None)?;
+                }
+            }
+            closure.finish()?;
+            Ok(closure.shape_id())
+        })
+        .collect()
 }
 
 fn kind_name(kind: ParamKind) -> &'static str {
