@@ -292,9 +292,9 @@ fn grazing_reflectance_follows_the_seed() {
     assert_close(ratio(1.0, view, view), 6.25, 0.0, 5e-3, "2.5 x 2.5");
 }
 
-/// The albedo estimate that lobe selection and pruning use (the closed form
-/// tabulated) against the closed form, at random views (a quarter near grazing) and
-/// parameters: within the documented 1% (measured here: 0.29% worst).
+/// The albedo estimate that lobe selection and pruning use (the `Fd` closed form and
+/// the subsurface fit) against the closed form, at random views (a quarter near
+/// grazing) and parameters: within the documented 0.1% (measured here: 0.021% worst).
 #[test]
 fn albedo_estimate_within_its_tolerance() {
     let l = lobe("disney_diffuse");

@@ -394,48 +394,6 @@ impl SpecularAnisotropicTable {
     }
 }
 
-/// The Disney diffuse's albedo for lobe selection (`Model::albedo_estimate`): the
-/// albedos of its `Fd` and subsurface shapes for a white base color, built once from
-/// the lobe's closed form over `sqrt(cos_o)` ([`ND_MU`] nodes) x roughness
-/// ([`ND_ROUGHNESS`] nodes) as code pairs of half their values (both stay below 2,
-/// checked), interpolated as the committed tables are: 4 gathers instead of the closed
-/// form's logarithm, recurrences and divisions. Measured against the closed form in
-/// tests/lobe_disney_diffuse.rs.
-pub struct DiffuseTable;
-
-const ND_MU: usize = 33;
-const ND_ROUGHNESS: usize = 17;
-
-impl DiffuseTable {
-    fn pairs() -> &'static [u32] {
-        static PAIRS: OnceLock<Vec<u32>> = OnceLock::new();
-        PAIRS.get_or_init(|| {
-            (0..ND_MU * ND_ROUGHNESS)
-                .map(|i| {
-                    let x = (i % ND_MU) as f32 / (ND_MU - 1) as f32;
-                    let r = (i / ND_MU) as f32 / (ND_ROUGHNESS - 1) as f32;
-                    let [d, ss] = crate::lobes::disney_diffuse::shape_albedos(x * x, r);
-                    assert!(d < 2.0 && ss < 2.0, "diffuse albedo {d}, {ss} above 2");
-                    let code = |v: f32| u32::from(super::generate::quantize(f64::from(v) / 2.0));
-                    code(d) | code(ss) << 16
-                })
-                .collect()
-        })
-    }
-
-    /// The albedo for a white base color at `wo` (above the surface).
-    #[inline(always)]
-    pub fn estimate<L: Lane>(wo: Vec3<L>, roughness: L, subsurface: L) -> L {
-        let m = grid(wo.z.clamp(L::zero(), L::one()).sqrt(), ND_MU);
-        let r = grid(roughness, ND_ROUGHNESS);
-        let (d, ss) = sum_pairs::<L, 4>(
-            Self::pairs(),
-            corners(L::zero(), [(m.0, m.1, 1), (r.0, r.1, ND_MU)]),
-        );
-        L::splat(2.0) * (d + (ss - d) * subsurface)
-    }
-}
-
 /// The Disney clearcoat's albedo table (module docs).
 pub struct ClearcoatTable;
 

@@ -32,13 +32,17 @@
 //! from `cos_o = 0.1` on, where the closed form cancels (see `albedo` below): worst
 //! relative error 4.3e-7 against f64 quadrature over roughness and subsurface in
 //! {0, 0.25, 0.5, 0.75, 1} and `cos_o` from 1e-6 to 1 (tests/lobe_disney_diffuse.rs).
+//! Its estimate (lobe selection and pruning) keeps the `Fd` part's closed form, which
+//! is cheap, and replaces the subsurface part's logarithm and quadrature by a fit:
+//! quadratic in roughness (as the closed form is) with coefficients of degree 8 in
+//! `sqrt(cos_o)` ([`SS_FIT`]): no table, no gather.
 
 use super::lambert::cosine_hemisphere;
 use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
-use crate::albedo_table::disney::DiffuseTable;
 use crate::fresnel::schlick_weight;
+use crate::math::vmath::horner;
 use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
 
@@ -203,9 +207,10 @@ impl Model for DisneyDiffuse {
         1e-4
     }
 
-    /// [`DiffuseTable`], measured in tests/lobe_disney_diffuse.rs.
+    /// [`SS_FIT`]: within 3e-4 of the closed form (least squares over 257 `cos_o` x 33
+    /// roughness, tests/lobe_disney_diffuse.rs measures it).
     fn albedo_estimate_tolerance(_params: &[f32]) -> f32 {
-        0.01
+        1e-3
     }
 
     /// The closed-form albedo's largest channel over 65 `cos_o` from grazing to normal
@@ -283,12 +288,7 @@ impl Model for DisneyDiffuse {
         let fv = schlick_weight(a);
         let r = p.roughness;
         let half = L::splat(0.5);
-        let t_poly = [half, L::splat(1.0 / 3.0)];
-        let u_poly = [
-            L::splat(1.0 / 42.0),
-            L::splat(1.0 / 168.0),
-            L::splat(1.0 / 504.0),
-        ];
+        let (t_poly, u_poly) = polynomial_moments();
         let a_d = fresnel_pair_moment(r - half, r, a, fv, t_poly, u_poly);
 
         let mut j = [L::zero(); 9];
@@ -329,24 +329,72 @@ impl Model for DisneyDiffuse {
         Rgb::select(wo.z.gt(L::zero()), p.base_color * total, Rgb::zero())
     }
 
-    /// [`DiffuseTable`]: the closed form tabulated.
+    /// The `Fd` part in closed form, the subsurface part by [`SS_FIT`].
     #[inline(always)]
     fn albedo_estimate<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, _mode: Transport) -> Rgb<L> {
-        let total = DiffuseTable::estimate(wo, p.roughness, p.subsurface);
+        let a = wo.z.clamp(L::splat(ALBEDO_MIN_COS), L::one());
+        let r = p.roughness;
+        let (t_poly, u_poly) = polynomial_moments();
+        let a_d = fresnel_pair_moment(r - L::splat(0.5), r, a, schlick_weight(a), t_poly, u_poly);
+        let m = a.sqrt();
+        let [c0, c1, c2] = SS_FIT;
+        let a_ss = horner(m, c0) + r * (horner(m, c1) + r * horner(m, c2));
+        let s = p.subsurface;
+        let total = a_d * (L::one() - s) + a_ss * s;
         Rgb::select(wo.z.gt(L::zero()), p.base_color * total, Rgb::zero())
     }
 }
 
-/// The closed-form albedos of the `Fd` and subsurface shapes (white base color) at
-/// `cos_o` with `roughness`, from which [`DiffuseTable`] is built.
-pub(crate) fn shape_albedos(cos_o: f32, roughness: f32) -> [f32; 2] {
-    let wo = Vec3::new((1.0 - cos_o * cos_o).max(0.0).sqrt(), 0.0, cos_o.max(1e-6));
-    [0.0, 1.0].map(|subsurface| {
-        let p = Prepared {
-            base_color: Rgb::new(1.0, 1.0, 1.0),
-            roughness,
-            subsurface,
-        };
-        DisneyDiffuse::albedo(&p, wo, Transport::Radiance).g
-    })
+/// The `t` and `u` moments of the `Fd` shape's polynomial weights (`mu^0` and the
+/// closed-form `u_j = int mu^j (1 - mu)^5`), as `fresnel_pair_moment` takes them.
+#[inline(always)]
+fn polynomial_moments<L: Lane>() -> ([L; 2], [L; 3]) {
+    (
+        [L::splat(0.5), L::splat(1.0 / 3.0)],
+        [
+            L::splat(1.0 / 42.0),
+            L::splat(1.0 / 168.0),
+            L::splat(1.0 / 504.0),
+        ],
+    )
 }
+
+/// The subsurface shape's albedo (white base color) is `c0 + c1 r + c2 r^2` in the
+/// roughness `r`; each `c` as a polynomial in `sqrt(cos_o)`, highest degree first
+/// (least squares of the relative error against `albedo` over 257 `cos_o` from 1e-8 to
+/// 1 and 33 roughnesses: worst 2.8e-4).
+const SS_FIT: [[f32; 9]; 3] = [
+    [
+        -7.0027804e0,
+        4.903214e1,
+        -1.2632762e2,
+        1.5217728e2,
+        -8.079547e1,
+        6.123923e0,
+        6.896024e0,
+        2.047224e-2,
+        6.2482375e-1,
+    ],
+    [
+        -6.8930286e-1,
+        -5.119741e0,
+        2.7818172e1,
+        -4.4898827e1,
+        2.7074106e1,
+        4.3268514e-1,
+        -5.360101e0,
+        1.0162942e-2,
+        7.4390906e-1,
+    ],
+    [
+        -4.0131755e0,
+        1.922453e1,
+        -3.9447266e1,
+        4.55504e1,
+        -3.242857e1,
+        1.4133748e1,
+        -3.0614347e0,
+        -1.0242605e-1,
+        1.441599e-1,
+    ],
+];

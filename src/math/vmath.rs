@@ -43,7 +43,7 @@ const PIO2_LO: f32 = -4.371_138_828_673_793e-8;
 
 /// Horner evaluation `c[0] x^(n-1) + ... + c[n-1]` with `mul_add`.
 #[inline(always)]
-fn horner<L: Lane, const N: usize>(x: L, c: [f32; N]) -> L {
+pub fn horner<L: Lane, const N: usize>(x: L, c: [f32; N]) -> L {
     let mut p = L::splat(c[0]);
     for &ci in &c[1..] {
         p = p.mul_add(x, L::splat(ci));
