@@ -491,12 +491,52 @@ fn overrides_replace_parameters_and_are_checked() {
             },
             "not finite",
         ),
+        (
+            Override {
+                value: [f32::INFINITY, 0.0, 0.0],
+                ..metal
+            },
+            "not finite",
+        ),
+        (
+            Override {
+                value: [-1e-45, 0.0, 0.0],
+                ..metal
+            },
+            "outside its range",
+        ),
+        (
+            Override {
+                value: [0.5, f32::NEG_INFINITY, 0.5],
+                ..red
+            },
+            "not finite",
+        ),
+        (
+            Override {
+                value: [0.5, 0.5, 1.0000001],
+                ..red
+            },
+            "outside its range",
+        ),
     ] {
         let Err(e) = m.closure(&ctx, &[red, bad]) else {
             panic!("{bad:?} was accepted");
         };
         assert!(e.message.contains("overrides[1]"), "{}", e.message);
         assert!(e.message.contains(says), "{}", e.message);
+    }
+    // The range's ends, a denormal and -0 are in range.
+    for v in [0.0, -0.0, 1e-45, 1.0] {
+        let edge = Override {
+            value: [v; 3],
+            ..red
+        };
+        let at = Override {
+            value: [v, 0.0, 0.0],
+            ..metal
+        };
+        assert!(m.closure(&ctx, &[edge, at]).is_ok(), "{v} was refused");
     }
 }
 

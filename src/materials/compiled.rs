@@ -290,7 +290,6 @@ impl Material {
         let mut emitted = 0u32;
         // The strongest pruned slot, kept when every slot is pruned.
         let mut strongest: Option<(f32, usize)> = None;
-        let mut decoded = [0.0f32; MAX_DECODED_LEN];
         for k in 0..self.slots.len() {
             let weight = scale * e.weight[k];
             if !(weight.r > 0.0 || weight.g > 0.0 || weight.b > 0.0) {
@@ -299,6 +298,8 @@ impl Material {
             let (type_id, lobe) = &self.slots[k];
             let raw = &e.params[k][..self.block_lens[k]];
             debug_assert!(params::validate(lobe.name(), lobe.params(), raw).is_ok());
+            // Zeroed per slot, as `push_lobe` hands `decode` its block.
+            let mut decoded = [0.0f32; MAX_DECODED_LEN];
             let decoded = &mut decoded[..lobe.decoded_len()];
             lobe.decode(raw, decoded);
             if let Some(wo) = bake_wo {
