@@ -91,7 +91,8 @@ static void build_two_lobes(glint_runtime *rt, glint_arena *arena, long calls)
 
 /* Median time of glint_material_closure for a full Disney material (every lobe on),
  * with a base-color and a roughness override per call (as a textured host passes),
- * the arena reset every 64 closures; then glint_eval on such a closure. */
+ * the arena reset every 64 closures; then glint_eval and glint_eval_forward on such a
+ * closure. */
 static void material_closure(glint_runtime *rt, glint_arena *arena, long calls)
 {
     const char *json = "{\"material\": \"disney\", \"base_color\": [0.8, 0.2, 0.1], "
@@ -100,7 +101,7 @@ static void material_closure(glint_runtime *rt, glint_arena *arena, long calls)
     glint_material *m = NULL;
     glint_shading_context ctx;
     glint_override o[2];
-    double ns[REPEATS], eval_ns[REPEATS];
+    double ns[REPEATS], eval_ns[REPEATS], forward_ns[REPEATS];
     uint32_t lobes = 0;
     int rep;
     float sink = 0.0f;
@@ -142,12 +143,21 @@ static void material_closure(glint_runtime *rt, glint_arena *arena, long calls)
             sink += e.pdf;
         }
         eval_ns[rep] = (now_ns() - t0) / (double)calls;
+        t0 = now_ns();
+        for (k = 0; k < calls; k++) {
+            glint_vec3 wi = {-0.2f + 0.001f * (float)(k & 255), 0.1f, 0.9f};
+            check(glint_eval_forward(c, ctx.wo, wi, &e), "eval forward");
+            sink += e.pdf;
+        }
+        forward_ns[rep] = (now_ns() - t0) / (double)calls;
     }
     qsort(ns, REPEATS, sizeof(double), cmp_double);
     qsort(eval_ns, REPEATS, sizeof(double), cmp_double);
+    qsort(forward_ns, REPEATS, sizeof(double), cmp_double);
     printf("| full disney material: glint_material_closure (2 overrides) | %.1f ns |\n"
-           "| glint_eval on its closure (%u lobes) | %.1f ns |\n",
-           ns[REPEATS / 2], lobes, eval_ns[REPEATS / 2]);
+           "| glint_eval on its closure (%u lobes) | %.1f ns |\n"
+           "| glint_eval_forward on its closure | %.1f ns |\n",
+           ns[REPEATS / 2], lobes, eval_ns[REPEATS / 2], forward_ns[REPEATS / 2]);
     if (!(sink >= 0.0f))
         fprintf(stderr, "unexpected pdf sum\n");
     glint_material_destroy(m);
