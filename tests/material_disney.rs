@@ -330,6 +330,41 @@ fn shape_ids_are_those_of_the_same_lobes_added_one_by_one() {
     assert_eq!(seen.len(), 4, "lobe counts covered: {seen:?}");
 }
 
+/// A compiled material decodes the slots its parameters fix once (the clearcoat's
+/// gloss); a point whose override changes them decodes its own: both give the closure
+/// of a material compiled with the point's values, bit for bit.
+#[test]
+fn overridden_and_compiled_values_give_the_same_closures() {
+    let registry = registry();
+    let id = registry.find_material("disney").unwrap();
+    let ctx = ShadingContext::new(Vec3::new(0.3, 0.2, 0.93), Frame::IDENTITY);
+    let wi = Vec3::new(-0.35, -0.25, 0.9);
+    let with = |block: &[f32], overrides: &[Override]| {
+        let m = Material::new(&registry, id, Some(block), 0.0).unwrap();
+        let c = m.closure(&ctx, overrides).unwrap();
+        (c.eval(ctx.wo, wi).unwrap(), c.albedo(ctx.wo).unwrap())
+    };
+    let defaults = Material::new(&registry, id, None, 0.0).unwrap();
+    let base = defaults.params().to_vec();
+    // clearcoat 1 (entry 9); the gloss (entry 10) compiled or overridden.
+    let at = |entry: usize| glint::params::offset_of(defaults.kind().params(), entry);
+    for gloss in [0.0, 0.37, 1.0] {
+        let mut compiled = base.clone();
+        compiled[at(9)] = 1.0;
+        compiled[at(10)] = gloss;
+        let mut other = compiled.clone();
+        other[at(10)] = 1.0 - gloss * 0.5;
+        let set = Override {
+            param: 10,
+            kind: ParamKind::Float,
+            value: [gloss, 0.0, 0.0],
+        };
+        let want = with(&compiled, &[]);
+        assert_eq!(with(&other, &[set]), want, "gloss {gloss} overridden");
+        assert_eq!(with(&compiled, &[set]), want, "gloss {gloss} set to itself");
+    }
+}
+
 /// Directional albedo of the reference (f64): the smooth diffuse and sheen term by a
 /// midpoint rule over directions, the specular and clearcoat terms in slope space
 /// (`reference::slope_space_albedo`, stretched by the specular's alphas and, for

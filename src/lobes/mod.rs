@@ -387,6 +387,10 @@ pub trait LobeType: Send + Sync {
     }
     /// [`Model::bake`]: a decoded block's values that depend on `wo` alone.
     fn bake(&self, _decoded: &mut [f32], _wo: Vec3<f32>, _mode: Transport) {}
+    /// Whether [`LobeType::decode`] copies the block ([`Model::DECODE_COPIES`]).
+    fn decode_copies(&self) -> bool {
+        false
+    }
     /// [`LobeType::decode`] of `len` lanes' blocks in rows (value `p` of lane `j` at
     /// `p * len + j`, in `params` and in `out`).
     fn decode_rows(&self, params: &[f32], out: &mut [f32], len: usize) {
@@ -592,6 +596,9 @@ impl<M: Model> LobeType for Builtin<M> {
     }
     fn bake(&self, decoded: &mut [f32], wo: Vec3<f32>, mode: Transport) {
         M::bake(decoded, wo, mode);
+    }
+    fn decode_copies(&self) -> bool {
+        M::DECODE_COPIES
     }
     fn decode_rows(&self, params: &[f32], out: &mut [f32], len: usize) {
         if M::DECODE_COPIES && params.len() == out.len() {

@@ -36,6 +36,11 @@ pub struct Material {
     slots: Vec<(u32, LobeRef)>,
     /// Each slot's raw block length.
     block_lens: [usize; MAX_SLOTS],
+    /// The slots whose decode is more than a copy, with the raw block the material's
+    /// own parameters expand to (at normal incidence) and its decoded block: a point
+    /// whose slot block equals it (its overrides leave the slot alone) copies the
+    /// decoded block instead of decoding again (the clearcoat's takes logarithms).
+    decoded_defaults: Vec<Option<DecodedDefault>>,
     /// The shape id of a closure of this material alone, by the set of emitted slots
     /// (bit `k` for slot `k`); empty when a slot's type has enumerated parameters,
     /// whose choices are part of the shape.
@@ -101,6 +106,7 @@ impl Material {
             *len = params::block_size(lobe.params());
         }
         let shape_ids = shape_ids(&slots)?;
+        let decoded_defaults = decoded_defaults(kind, &block, &slots, &block_lens);
         Ok(Material {
             kind,
             type_id,
@@ -108,6 +114,7 @@ impl Material {
             entries,
             slots,
             block_lens,
+            decoded_defaults,
             shape_ids,
             prune,
         })
@@ -150,17 +157,30 @@ impl Material {
 
     /// Override `i` applied to `out`, a block [`Self::apply`] started.
     pub fn apply_one(&self, i: usize, o: &Override, out: &mut [f32]) -> Result<(), Error> {
+        // A float or rgb entry set in range (NaN is not): the common case, in place.
+        if let Some(Some(slot)) = self.entries.get(o.param as usize) {
+            let spec = slot.spec;
+            let in_range = |v: f32| v >= spec.min && v <= spec.max && v.abs() <= f32::MAX;
+            match (spec.kind, o.kind) {
+                (ParamKind::Float, ParamKind::Float) if in_range(o.value[0]) => {
+                    out[slot.offset] = o.value[0];
+                    return Ok(());
+                }
+                (ParamKind::Rgb, ParamKind::Rgb) if o.value.iter().all(|&v| in_range(v)) => {
+                    out[slot.offset..slot.offset + 3].copy_from_slice(&o.value);
+                    return Ok(());
+                }
+                _ => {}
+            }
+        }
+        self.apply_checked(i, o, out)
+    }
+
+    /// [`Self::apply_one`] with every check and its message.
+    fn apply_checked(&self, i: usize, o: &Override, out: &mut [f32]) -> Result<(), Error> {
         let slot = self.override_slot(i, o.param, o.kind)?;
         let value = &o.value[..o.kind.size()];
-        let spec = slot.spec;
-        // In range (NaN is not): the common case, without the checks' messages.
-        let plain = spec.kind != ParamKind::Enum
-            && value
-                .iter()
-                .all(|&v| v >= spec.min && v <= spec.max && v.abs() <= f32::MAX);
-        if !plain {
-            self.check_element(i, spec, value, slot.element)?;
-        }
+        self.check_element(i, slot.spec, value, slot.element)?;
         out[slot.offset..slot.offset + value.len()].copy_from_slice(value);
         Ok(())
     }
@@ -301,7 +321,18 @@ impl Material {
             // Zeroed per slot, as `push_lobe` hands `decode` its block.
             let mut decoded = [0.0f32; MAX_DECODED_LEN];
             let decoded = &mut decoded[..lobe.decoded_len()];
-            lobe.decode(raw, decoded);
+            match &self.decoded_defaults[k] {
+                // Bit for bit (-0 and 0 may decode apart).
+                Some(d)
+                    if raw
+                        .iter()
+                        .zip(&d.raw)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()) =>
+                {
+                    decoded.copy_from_slice(&d.decoded[..decoded.len()])
+                }
+                _ => lobe.decode(raw, decoded),
+            }
             if let Some(wo) = bake_wo {
                 lobe.bake(decoded, wo, closure.transport());
             }
@@ -333,6 +364,44 @@ impl Material {
         self.build_closure(&mut closure, ctx, overrides)?;
         Ok(closure)
     }
+}
+
+/// A slot's raw block as the material's own parameters expand it, decoded.
+#[derive(Clone)]
+struct DecodedDefault {
+    raw: [f32; MAX_SLOT_PARAMS],
+    decoded: [f32; MAX_DECODED_LEN],
+}
+
+/// [`Material::decoded_defaults`]: the slots whose decode is not a copy, decoded once
+/// from the expansion of `params` at normal incidence.
+fn decoded_defaults(
+    kind: &dyn MaterialType,
+    params: &[f32],
+    slots: &[(u32, LobeRef)],
+    block_lens: &[usize; MAX_SLOTS],
+) -> Vec<Option<DecodedDefault>> {
+    let ctx = ShadingContext::new(Vec3::new(0.0, 0.0, 1.0), Frame::IDENTITY);
+    let e = kind.expand(params, &ctx.lanes());
+    slots
+        .iter()
+        .enumerate()
+        .map(|(k, (_, lobe))| {
+            if lobe.decode_copies() {
+                return None;
+            }
+            let mut d = DecodedDefault {
+                raw: e.params[k],
+                decoded: [0.0; MAX_DECODED_LEN],
+            };
+            let raw = &d.raw[..block_lens[k]];
+            // A block outside the schema (a slot that weight 0 leaves unset) is never
+            // emitted as is: nothing to cache.
+            params::validate(lobe.name(), lobe.params(), raw).ok()?;
+            lobe.decode(raw, &mut d.decoded[..lobe.decoded_len()]);
+            Some(d)
+        })
+        .collect()
 }
 
 /// [`Material::shape_ids`] of `slots`: each set's closure built once (with the
