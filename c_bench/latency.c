@@ -89,6 +89,26 @@ static void build_two_lobes(glint_runtime *rt, glint_arena *arena, long calls)
            "| --- | --- |\n", ns[REPEATS / 2]);
 }
 
+typedef glint_status (*eval_call)(const glint_closure *, glint_vec3, glint_vec3,
+                                  glint_eval_result *);
+
+/* Mean time of one `eval` of `c` from `wo` over `calls` calls, `wi` sweeping an arc;
+ * the pdfs go to `sink` so that the calls stay. */
+static double time_eval(eval_call eval, const glint_closure *c, glint_vec3 wo, long calls,
+                        float *sink)
+{
+    glint_eval_result e;
+    double t0 = now_ns();
+    long k;
+    e.struct_size = sizeof e;
+    for (k = 0; k < calls; k++) {
+        glint_vec3 wi = {-0.2f + 0.001f * (float)(k & 255), 0.1f, 0.9f};
+        check(eval(c, wo, wi, &e), "eval");
+        *sink += e.pdf;
+    }
+    return (now_ns() - t0) / (double)calls;
+}
+
 /* Median time of glint_material_closure for a full Disney material (every lobe on),
  * with a base-color and a roughness override per call (as a textured host passes),
  * the arena reset every 64 closures; then glint_eval and glint_eval_forward on such a
@@ -129,27 +149,11 @@ static void material_closure(glint_runtime *rt, glint_arena *arena, long calls)
     }
     for (rep = 0; rep < REPEATS; rep++) {
         glint_closure *c = NULL;
-        glint_eval_result e;
-        double t0;
-        long k;
-        e.struct_size = sizeof e;
         check(glint_arena_reset(arena), "reset");
         check(glint_material_closure(m, arena, &ctx, o, 2, &c), "material closure");
         check(glint_closure_lobe_count(c, &lobes), "lobes");
-        t0 = now_ns();
-        for (k = 0; k < calls; k++) {
-            glint_vec3 wi = {-0.2f + 0.001f * (float)(k & 255), 0.1f, 0.9f};
-            check(glint_eval(c, ctx.wo, wi, &e), "eval");
-            sink += e.pdf;
-        }
-        eval_ns[rep] = (now_ns() - t0) / (double)calls;
-        t0 = now_ns();
-        for (k = 0; k < calls; k++) {
-            glint_vec3 wi = {-0.2f + 0.001f * (float)(k & 255), 0.1f, 0.9f};
-            check(glint_eval_forward(c, ctx.wo, wi, &e), "eval forward");
-            sink += e.pdf;
-        }
-        forward_ns[rep] = (now_ns() - t0) / (double)calls;
+        eval_ns[rep] = time_eval(glint_eval, c, ctx.wo, calls, &sink);
+        forward_ns[rep] = time_eval(glint_eval_forward, c, ctx.wo, calls, &sink);
     }
     qsort(ns, REPEATS, sizeof(double), cmp_double);
     qsort(eval_ns, REPEATS, sizeof(double), cmp_double);

@@ -203,6 +203,13 @@ impl ParamSpec {
         }
     }
 
+    /// Whether `v` is finite and in `[min, max]` (NaN is not), for float and rgb
+    /// values; without branches, so that checks over rows vectorize.
+    #[inline(always)]
+    pub fn in_range(&self, v: f32) -> bool {
+        (v.abs() <= f32::MAX) & (v >= self.min) & (v <= self.max)
+    }
+
     /// Whether the entry holds `capacity` elements (arrays and table columns).
     pub const fn repeated(&self) -> bool {
         matches!(self.shape, Shape::Array | Shape::Column)

@@ -352,9 +352,7 @@ fn stage_blocks(
         for c in 0..size {
             let row = &mut blocks[(at + c) * len..][..n];
             gather(row, o.value[c], lanes);
-            in_range &= row.iter().fold(true, |ok, &v| {
-                ok & (v.abs() <= f32::MAX) & (v >= spec.min) & (v <= spec.max)
-            });
+            in_range &= row.iter().fold(true, |ok, &v| ok & spec.in_range(v));
         }
         if in_range {
             continue;

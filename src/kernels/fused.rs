@@ -8,7 +8,7 @@
 //! the half vector) and the sums are stored once. The arithmetic is the unfused
 //! path's, operation for operation, so the outputs are the same bits.
 
-use super::{Directions, MAX_LOBE_PARAMS, direction, load_row3, store};
+use super::{Directions, MAX_LOBE_PARAMS, direction, load_rgb, load_row3, rgb_at, store};
 use crate::closure::Closure;
 use crate::lobes::disney_clearcoat::DisneyClearcoat;
 use crate::lobes::disney_diffuse::DisneyDiffuse;
@@ -287,11 +287,7 @@ fn mixture_body<S: Shape, L: Lane>(job: &mut FusedMixtureJob<'_>) {
         for i in (run[0]..run[1]).step_by(L::LANES) {
             let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
             let wi = direction(job.wi, i, L::LANES, Directions::Sampled, &mut unused);
-            let own_value = Rgb::new(
-                L::load(&job.own_value[0][i..]),
-                L::load(&job.own_value[1][i..]),
-                L::load(&job.own_value[2][i..]),
-            );
+            let own_value = load_rgb(job.own_value, i, L::LANES);
             let own_pdf = probability * L::load(&job.own_pdf[i..]);
             let (value, pdf) = S::sum(
                 &p,
@@ -365,11 +361,7 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
                 *r = L::load(&slot.params[p * len + i..]);
             }
             terms[k] = Term {
-                weight: Rgb::new(
-                    L::load(&slot.weight[i..]),
-                    L::load(&slot.weight[len + i..]),
-                    L::load(&slot.weight[2 * len + i..]),
-                ),
+                weight: rgb_at(slot.weight, 0, len, i),
                 probability: L::load(&slot.probability[i..]),
             };
         }
@@ -389,11 +381,7 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
         let sums = match &job.own {
             None => S::sum(&p, &terms, None, wo, wi, job.mode),
             Some(own) => {
-                let own_value = Rgb::new(
-                    L::load(&own.value[0][i..]),
-                    L::load(&own.value[1][i..]),
-                    L::load(&own.value[2][i..]),
-                );
+                let own_value = load_rgb(own.value, i, L::LANES);
                 let chosen = (L::load(&own.chosen[i..]), &own.slots);
                 let own_pdf = L::load(&own.pdf[i..]);
                 S::sum_per_lane(&p, &terms, chosen, own_value, own_pdf, wo, wi, job.mode)

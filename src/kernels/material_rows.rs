@@ -5,8 +5,8 @@
 //! in the same order (`Frame::new`, `Material::emit`, `closure::selection`,
 //! `mixture::choose`), so the rows hold the bits a closure per lane would.
 
-use super::load_row3;
 use super::mixture::clamp_random;
+use super::{load_row3, rgb_at};
 use crate::materials::MAX_SLOTS;
 use crate::math::frame::duff_axes;
 use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
@@ -72,15 +72,6 @@ pub struct SelectJob<'a> {
     pub probability: &'a mut [f32],
     /// Out: slots with a nonzero probability on some lane.
     pub kept: [bool; MAX_SLOTS],
-}
-
-#[inline(always)]
-fn rgb_at<L: Lane>(rows: &[f32], k: usize, len: usize, i: usize) -> Rgb<L> {
-    Rgb::new(
-        L::load(&rows[3 * k * len + i..]),
-        L::load(&rows[(3 * k + 1) * len + i..]),
-        L::load(&rows[(3 * k + 2) * len + i..]),
-    )
 }
 
 /// [`select_slots`] with the slot count a constant, so its loops unroll and its

@@ -425,6 +425,16 @@ fn direction<L: Lane>(
     }
 }
 
+/// Colour `k` (rows `3 k .. 3 k + 2` of `stride` values) at lane `i`.
+#[inline(always)]
+fn rgb_at<L: Lane>(rows: &[f32], k: usize, stride: usize, i: usize) -> Rgb<L> {
+    Rgb::new(
+        L::load(&rows[3 * k * stride + i..]),
+        L::load(&rows[(3 * k + 1) * stride + i..]),
+        L::load(&rows[(3 * k + 2) * stride + i..]),
+    )
+}
+
 /// Frame axis `axis` (rows `3 axis .. 3 axis + 2` of `stride` values) at lane `i`.
 #[inline(always)]
 fn load_row3<L: Lane>(frame: &[f32], stride: usize, axis: usize, i: usize) -> Vec3<L> {

@@ -160,13 +160,12 @@ impl Material {
         // A float or rgb entry set in range (NaN is not): the common case, in place.
         if let Some(Some(slot)) = self.entries.get(o.param as usize) {
             let spec = slot.spec;
-            let in_range = |v: f32| v >= spec.min && v <= spec.max && v.abs() <= f32::MAX;
             match (spec.kind, o.kind) {
-                (ParamKind::Float, ParamKind::Float) if in_range(o.value[0]) => {
+                (ParamKind::Float, ParamKind::Float) if spec.in_range(o.value[0]) => {
                     out[slot.offset] = o.value[0];
                     return Ok(());
                 }
-                (ParamKind::Rgb, ParamKind::Rgb) if o.value.iter().all(|&v| in_range(v)) => {
+                (ParamKind::Rgb, ParamKind::Rgb) if o.value.iter().all(|&v| spec.in_range(v)) => {
                     out[slot.offset..slot.offset + 3].copy_from_slice(&o.value);
                     return Ok(());
                 }
@@ -415,8 +414,8 @@ fn shape_ids(slots: &[(u32, LobeRef)]) -> Result<Box<[u64]>, Error> {
             let mut closure = Closure::new(None, Transport::Radiance);
             for (k, (type_id, lobe)) in slots.iter().enumerate() {
                 if set & 1 << k != 0 {
-                    let frame = Frame::new(Vec3::new(0.0, 0.0, 1.0), None);
-                    closure.push_lobe(lobe, *type_id, Rgb::new(1.0, 1.0, 1.0), frame, None)?;
+                    let white = Rgb::new(1.0, 1.0, 1.0);
+                    closure.push_lobe(lobe, *type_id, white, Frame::IDENTITY, None)?;
                 }
             }
             closure.finish()?;
