@@ -37,7 +37,7 @@ impl MaterialModel for Nested {
     const NAME: &'static str = "nested_test";
     const SUMMARY: &'static str = "test schema";
     const PARAMS: &'static [ParamSpec] = SCHEMA;
-    const LOBES: &'static [&'static str] = &["lambert"];
+    type Slots = (glint::lobes::lambert::Lambert,);
     const VERIFY_CASES: &'static [VerifyCase] = &[];
     fn expand<L: Lane>(p: Params<'_, L>, _ctx: &Context<L>, out: &mut Expansion<L>) {
         // The lambert color is ramp[1].color: a read at a fixed offset of the block.
@@ -550,4 +550,74 @@ fn flat_schema_bounds_agree_with_validate() {
             block[at] = keep;
         }
     }
+}
+
+/// A model that takes the built-in `lambert`'s name without being it.
+struct Impostor;
+
+impl glint::lobes::Model for Impostor {
+    const NAME: &'static str = "lambert";
+    const SUMMARY: &'static str = "not the built-in lambert";
+    const PARAMS: &'static [ParamSpec] = &[ParamSpec::rgb("color", [0.8; 3], 0.0, 1.0, "")];
+    const FLAGS: u32 = glint::lobes::flags::REFLECTION | glint::lobes::flags::DIFFUSE;
+    const RECIPROCAL: bool = true;
+    fn albedo_tolerance(_params: &[f32]) -> f32 {
+        0.0
+    }
+    type Prepared<L: Lane> = ();
+    fn prepare<L: Lane>(_decoded: Params<'_, L>) {}
+    fn eval<L: Lane>(
+        _p: &(),
+        _wo: glint::math::Vec3<L>,
+        _wi: glint::math::Vec3<L>,
+        _mode: glint::lobes::Transport,
+    ) -> glint::lobes::Eval<L> {
+        glint::lobes::Eval::zero()
+    }
+    fn sample<L: Lane>(
+        _p: &(),
+        _wo: glint::math::Vec3<L>,
+        _uc: L,
+        _u0: L,
+        _u1: L,
+        _mode: glint::lobes::Transport,
+        _settle: &mut impl glint::lobes::Settle<L>,
+    ) -> glint::lobes::Sample<L> {
+        glint::lobes::no_sample()
+    }
+    fn albedo<L: Lane>(
+        _p: &(),
+        _wo: glint::math::Vec3<L>,
+        _mode: glint::lobes::Transport,
+    ) -> glint::math::Rgb<L> {
+        glint::math::Rgb::zero()
+    }
+}
+
+/// A material whose slot names a registered type that is not its slot's model.
+struct ImpostorMaterial;
+
+impl MaterialModel for ImpostorMaterial {
+    const NAME: &'static str = "impostor_test";
+    const SUMMARY: &'static str = "slot model unlike its registered type";
+    const PARAMS: &'static [ParamSpec] = &[ParamSpec::float("weight", 1.0, 0.0, 1.0, "")];
+    type Slots = (Impostor,);
+    fn expand<L: Lane>(_p: Params<'_, L>, _ctx: &Context<L>, _out: &mut Expansion<L>) {}
+}
+
+static IMPOSTOR: BuiltinMaterial<ImpostorMaterial> = BuiltinMaterial::new();
+
+/// Closures are built by calling each slot's model directly, so the registered type
+/// a slot's name resolves to must be that model: compiling refuses the material.
+#[test]
+fn a_slot_whose_name_is_another_model_is_refused() {
+    let mut r = Registry::with_builtins();
+    let id = r.register_material(&IMPOSTOR).expect("register");
+    let e = Material::new(&r, id, None, 0.0).err().expect("refused");
+    assert_eq!(e.status, Status::Unsupported);
+    assert!(
+        e.message.contains("slot 0") && e.message.contains("lambert"),
+        "{}",
+        e.message
+    );
 }

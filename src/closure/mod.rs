@@ -276,6 +276,7 @@ impl Closure {
 
     /// [`Self::push_lobe`] of a block already decoded (and baked at the closure's `wo`):
     /// a material decodes its slots to prune them before adding them.
+    #[inline(always)]
     pub(crate) fn push_decoded(
         &mut self,
         lobe: &LobeRef,
@@ -302,6 +303,7 @@ impl Closure {
 
     /// Room for one more lobe whose raw and decoded blocks take `size` and
     /// `decoded_size` values.
+    #[inline(always)]
     fn make_room(&mut self, size: usize, decoded_size: usize) -> Result<(), Error> {
         if self.lobe_count() == MAX_LOBES {
             return Err(Error::new(
@@ -323,6 +325,7 @@ impl Closure {
 
     /// The lobe whose blocks were appended at `start`; returns its index.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn record_lobe(
         &mut self,
         lobe: &LobeRef,
@@ -738,35 +741,40 @@ pub(crate) fn selection(
         s[0] = 1.0;
         return s;
     }
+    let s = &mut s[..n];
+    let mut sum = 0.0;
     for (s, &share) in s.iter_mut().zip(shares) {
         *s = share.max(0.0);
+        sum += *s;
     }
-    if s[..n].iter().sum::<f32>() <= 0.0 {
-        for (k, s) in s[..n].iter_mut().enumerate() {
+    if sum <= 0.0 {
+        sum = 0.0;
+        for (k, s) in s.iter_mut().enumerate() {
             *s = weight_luminance(k).max(0.0);
+            sum += *s;
         }
     }
-    if s[..n].iter().sum::<f32>() <= 0.0 {
-        s[..n].fill(1.0);
+    if sum <= 0.0 {
+        s.fill(1.0);
     }
-    normalize_shares(&s[..n])
+    normalize_shares(s);
+    let mut p = [0.0f32; MAX_LOBES];
+    p[..n].copy_from_slice(s);
+    p
 }
 
-/// Probabilities proportional to `shares` (finite, >= 0, not all 0). The shares are
-/// divided by the largest first, so their sum cannot overflow.
-fn normalize_shares(shares: &[f32]) -> [f32; MAX_LOBES] {
-    let n = shares.len();
+/// Scale `shares` (finite, >= 0, not all 0) into probabilities proportional to them.
+/// They are divided by the largest first, so their sum cannot overflow.
+fn normalize_shares(shares: &mut [f32]) {
     let largest = shares.iter().fold(0.0f32, |m, &s| m.max(s));
-    let mut p = [0.0f32; MAX_LOBES];
-    for (p, &s) in p.iter_mut().zip(shares) {
-        *p = s / largest;
+    let mut total = 0.0f32;
+    for p in shares.iter_mut() {
+        *p /= largest;
+        total += *p;
     }
-    // Over the lobes only: the zeros after them would not change the sum.
-    let total: f32 = p[..n].iter().sum();
-    for p in &mut p[..n] {
+    for p in shares.iter_mut() {
         *p /= total;
     }
-    p
 }
 
 pub(crate) use mixture::ONE_MINUS_EPSILON;
@@ -800,11 +808,12 @@ mod tests {
 
     #[test]
     fn shares_near_the_largest_float_normalize_without_overflow() {
-        let p = normalize_shares(&[3e38, 3e38, 0.0, f32::MAX]);
+        let mut p = [3e38, 3e38, 0.0, f32::MAX];
+        normalize_shares(&mut p);
         let share = 3e38 / f32::MAX;
         let expected = share / (2.0 * share + 1.0);
         assert!((p[0] - expected).abs() <= 1e-6 && p[0] == p[1], "{p:?}");
         assert_eq!(p[2], 0.0);
-        assert!((p[..4].iter().sum::<f32>() - 1.0).abs() <= 1e-6, "{p:?}");
+        assert!((p.iter().sum::<f32>() - 1.0).abs() <= 1e-6, "{p:?}");
     }
 }

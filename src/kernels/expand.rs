@@ -5,7 +5,7 @@
 
 use crate::lobes::Params;
 use crate::materials::compiled::MAX_MATERIAL_PARAMS;
-use crate::materials::{Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel};
+use crate::materials::{Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, SlotModels};
 use crate::math::{Lane, Rgb, Vec3};
 use crate::simd::kernel;
 
@@ -30,7 +30,7 @@ pub struct ExpandJob<'a> {
 fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     let len = job.len;
     debug_assert!(len.is_multiple_of(L::LANES) && job.param_count <= MAX_MATERIAL_PARAMS);
-    let slots = M::LOBES.len();
+    let slots = M::Slots::NAMES.len();
     let mut raw = [L::zero(); MAX_MATERIAL_PARAMS];
     let zero = Vec3::new(L::zero(), L::zero(), L::zero());
     let mut e = Expansion::<L>::default();

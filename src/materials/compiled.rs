@@ -2,10 +2,13 @@
 //! lobe types, resolved once per scene material; per shading point, overrides,
 //! expansion, pruning and the closure.
 
-use super::{MAX_SLOT_PARAMS, MAX_SLOTS, MaterialType, ShadingContext};
+use super::{
+    Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, MaterialType, ShadingContext, SlotModels,
+    SlotVisitor,
+};
 use crate::closure::{Closure, MAX_LOBES};
 use crate::error::{Error, Status};
-use crate::lobes::{MAX_DECODED_LEN, Transport};
+use crate::lobes::{MAX_DECODED_LEN, Model, Params, Transport};
 use crate::math::{Frame, Rgb, Vec3};
 use crate::params::{self, ParamKind, ParamSpec};
 use crate::registry::{LobeRef, Registry};
@@ -98,6 +101,18 @@ impl Material {
                 Ok((id, lobe))
             })
             .collect::<Result<Vec<_>, Error>>()?;
+        // `emit` calls the slots' models directly: the registered types must be them.
+        let models = kind.slot_models();
+        if let Some(k) = (0..slots.len()).find(|&k| slots[k].1.model() != Some(models[k])) {
+            return Err(Error::new(
+                Status::Unsupported,
+                format!(
+                    "material {}: slot {k}'s lobe type {} is not the built-in model the material was built with",
+                    kind.name(),
+                    slots[k].1.name()
+                ),
+            ));
+        }
         let entries = (0..specs.len() as u32)
             .map(|i| params::locate(kind.name(), kind.params(), i, &"").ok())
             .collect();
@@ -300,61 +315,7 @@ impl Material {
         block: &[f32],
         scale: Rgb<f32>,
     ) -> Result<([f32; MAX_LOBES], u32), Error> {
-        let local = ctx.lanes();
-        let e = self.kind.expand(block, &local);
-        // Blocks are baked at the closure's `wo` (as `push_lobe` does); estimates
-        // are at the context's.
-        let bake_wo = closure.view().map(|wo| ctx.frame.to_local(wo));
-        let mut shares = [0.0f32; MAX_LOBES];
-        let mut emitted = 0u32;
-        // The strongest pruned slot, kept when every slot is pruned.
-        let mut strongest: Option<(f32, usize)> = None;
-        for k in 0..self.slots.len() {
-            let weight = scale * e.weight[k];
-            if !(weight.r > 0.0 || weight.g > 0.0 || weight.b > 0.0) {
-                continue;
-            }
-            let (type_id, lobe) = &self.slots[k];
-            let raw = &e.params[k][..self.block_lens[k]];
-            debug_assert!(params::validate(lobe.name(), lobe.params(), raw).is_ok());
-            // Zeroed per slot, as `push_lobe` hands `decode` its block.
-            let mut decoded = [0.0f32; MAX_DECODED_LEN];
-            let decoded = &mut decoded[..lobe.decoded_len()];
-            match &self.decoded_defaults[k] {
-                // Bit for bit (-0 and 0 may decode apart).
-                Some(d)
-                    if raw
-                        .iter()
-                        .zip(&d.raw)
-                        .all(|(a, b)| a.to_bits() == b.to_bits()) =>
-                {
-                    decoded.copy_from_slice(&d.decoded[..decoded.len()])
-                }
-                _ => lobe.decode(raw, decoded),
-            }
-            if let Some(wo) = bake_wo {
-                lobe.bake(decoded, wo, closure.transport());
-            }
-            let albedo = lobe.albedo_estimate_decoded(decoded, local.wo, closure.transport());
-            let share = (weight * albedo).luminance();
-            if share < self.prune {
-                if strongest.is_none_or(|(s, _)| share > s) {
-                    strongest = Some((share, k));
-                }
-                continue;
-            }
-            closure.push_decoded(lobe, *type_id, weight, ctx.frame, raw, decoded)?;
-            shares[emitted.count_ones() as usize] = share;
-            emitted |= 1 << k;
-        }
-        if let (0, Some((share, k))) = (emitted, strongest) {
-            let (type_id, lobe) = &self.slots[k];
-            let raw = &e.params[k][..self.block_lens[k]];
-            closure.push_lobe(lobe, *type_id, scale * e.weight[k], ctx.frame, Some(raw))?;
-            shares[0] = share;
-            emitted = 1 << k;
-        }
-        Ok((shares, emitted))
+        self.kind.emit(self, closure, ctx, block, scale)
     }
 
     /// The closure of one shading point, as a new value.
@@ -362,6 +323,113 @@ impl Material {
         let mut closure = Closure::new(Some(ctx.wo), Transport::Radiance);
         self.build_closure(&mut closure, ctx, overrides)?;
         Ok(closure)
+    }
+}
+
+/// [`Material::emit`] for material model `M` (whose slots `material` holds).
+#[inline(always)]
+pub(crate) fn emit<M: MaterialModel>(
+    material: &Material,
+    closure: &mut Closure,
+    ctx: &ShadingContext,
+    block: &[f32],
+    scale: Rgb<f32>,
+) -> Result<([f32; MAX_LOBES], u32), Error> {
+    let local = ctx.lanes();
+    let mut expansion = Expansion::default();
+    M::expand(Params::new(block), &local, &mut expansion);
+    let mut emitter = Emitter {
+        material,
+        // Blocks are baked at the closure's `wo` (as `push_lobe` does); estimates
+        // are at the context's.
+        bake_wo: closure.view().map(|wo| ctx.frame.to_local(wo)),
+        closure,
+        frame: ctx.frame,
+        wo: local.wo,
+        expansion: &expansion,
+        scale,
+        shares: [0.0; MAX_LOBES],
+        emitted: 0,
+        strongest: None,
+    };
+    M::Slots::visit(&mut emitter)?;
+    let Emitter {
+        closure,
+        mut shares,
+        mut emitted,
+        strongest,
+        ..
+    } = emitter;
+    if let (0, Some((share, k))) = (emitted, strongest) {
+        let (type_id, lobe) = &material.slots[k];
+        let raw = &expansion.params[k][..material.block_lens[k]];
+        let weight = scale * expansion.weight[k];
+        closure.push_lobe(lobe, *type_id, weight, ctx.frame, Some(raw))?;
+        shares[0] = share;
+        emitted = 1 << k;
+    }
+    Ok((shares, emitted))
+}
+
+/// [`emit`]'s walk over the slots.
+struct Emitter<'a> {
+    material: &'a Material,
+    closure: &'a mut Closure,
+    frame: Frame,
+    /// The context's `wo` in the shading frame: the estimates' direction.
+    wo: Vec3<f32>,
+    bake_wo: Option<Vec3<f32>>,
+    expansion: &'a Expansion<f32>,
+    scale: Rgb<f32>,
+    shares: [f32; MAX_LOBES],
+    emitted: u32,
+    /// The strongest pruned slot, kept when every slot is pruned.
+    strongest: Option<(f32, usize)>,
+}
+
+impl SlotVisitor for Emitter<'_> {
+    /// Slot `k` decoded, baked and estimated on the stack, then pruned or added.
+    #[inline(always)]
+    fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
+        let weight = self.scale * self.expansion.weight[k];
+        if !(weight.r > 0.0 || weight.g > 0.0 || weight.b > 0.0) {
+            return Ok(());
+        }
+        let raw = &self.expansion.params[k][..params::block_size(M::PARAMS)];
+        debug_assert!(params::validate(M::NAME, M::PARAMS, raw).is_ok());
+        // Zeroed, as `push_lobe` hands `decode` its block.
+        let mut decoded = [0.0f32; MAX_DECODED_LEN];
+        let decoded = &mut decoded[..M::DECODED_LEN];
+        match &self.material.decoded_defaults[k] {
+            // Bit for bit (-0 and 0 may decode apart).
+            Some(d)
+                if raw
+                    .iter()
+                    .zip(&d.raw)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()) =>
+            {
+                decoded.copy_from_slice(&d.decoded[..decoded.len()])
+            }
+            _ => M::decode(raw, decoded),
+        }
+        let mode = self.closure.transport();
+        if let Some(wo) = self.bake_wo {
+            M::bake(decoded, wo, mode);
+        }
+        let albedo = M::albedo_estimate(&M::prepare(Params::new(decoded)), self.wo, mode);
+        let share = (weight * albedo).luminance();
+        if share < self.material.prune {
+            if self.strongest.is_none_or(|(s, _)| share > s) {
+                self.strongest = Some((share, k));
+            }
+            return Ok(());
+        }
+        let (type_id, lobe) = &self.material.slots[k];
+        self.closure
+            .push_decoded(lobe, *type_id, weight, self.frame, raw, decoded)?;
+        self.shares[self.emitted.count_ones() as usize] = share;
+        self.emitted |= 1 << k;
+        Ok(())
     }
 }
 

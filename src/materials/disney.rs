@@ -23,13 +23,17 @@
 //! base_color, metallic)` and `Csheen = mix(1, Ctint, sheen_tint)`.
 
 use super::{Context, Expansion, MaterialModel};
+use crate::lobes::disney_clearcoat::DisneyClearcoat;
+use crate::lobes::disney_diffuse::DisneyDiffuse;
+use crate::lobes::disney_sheen::DisneySheen;
+use crate::lobes::disney_specular::DisneySpecular;
 use crate::lobes::{Params, VerifyCase};
 use crate::math::{Lane, Rgb};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct Disney;
 
-/// Slots, in [`Disney::LOBES`] order.
+/// Slots, in [`Disney::Slots`] order.
 pub const DIFFUSE: usize = 0;
 pub const SHEEN: usize = 1;
 pub const SPECULAR: usize = 2;
@@ -117,12 +121,7 @@ impl MaterialModel for Disney {
             "clearcoat GTR1 alpha mix(0.1, 0.001, clearcoat_gloss)",
         ),
     ];
-    const LOBES: &'static [&'static str] = &[
-        "disney_diffuse",
-        "disney_sheen",
-        "disney_specular",
-        "disney_clearcoat",
-    ];
+    type Slots = (DisneyDiffuse, DisneySheen, DisneySpecular, DisneyClearcoat);
     const VERIFY_CASES: &'static [VerifyCase] = &[
         VerifyCase {
             name: "all 0",

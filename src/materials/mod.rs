@@ -14,18 +14,24 @@
 //! parameters, by index), expands, and builds a closure: each lobe's
 //! `luminance(weight * albedo(wo))`, with the lobe's albedo estimate
 //! (`Model::albedo_estimate`), both prunes it (below the runtime's `prune=` threshold
-//! it is not emitted) and sets its selection probability.
+//! it is not emitted) and sets its selection probability. The slots' models are known
+//! at compile time ([`MaterialModel::Slots`]), so this per-point path is one
+//! monomorphized function per material type: no virtual call per slot, and each
+//! slot's decode, estimate and block copies inlined with their sizes known.
 
 pub mod compiled;
 pub mod disney;
 
 pub use compiled::{Material, Override};
 
+use crate::closure::{Closure, MAX_LOBES};
+use crate::error::Error;
 use crate::kernels::expand::ExpandJob;
-use crate::lobes::{Params, VerifyCase};
+use crate::lobes::{Model, Params, VerifyCase};
 use crate::math::{Frame, Lane, Rgb, Vec3};
 use crate::params::ParamSpec;
 use crate::simd::Kernels;
+use std::any::TypeId;
 use std::marker::PhantomData;
 
 /// Most lobes one material emits.
@@ -117,8 +123,8 @@ pub trait MaterialModel: Send + Sync + 'static {
     /// One line for registries and UIs.
     const SUMMARY: &'static str;
     const PARAMS: &'static [ParamSpec];
-    /// The lobe type of each slot, by registered name.
-    const LOBES: &'static [&'static str];
+    /// The lobe model of each slot, in order: a tuple of built-in [`Model`]s.
+    type Slots: SlotModels;
     /// Parameter sets the verification harness covers besides the defaults.
     const VERIFY_CASES: &'static [VerifyCase] = &[];
 
@@ -128,14 +134,67 @@ pub trait MaterialModel: Send + Sync + 'static {
     fn expand<L: Lane>(params: Params<'_, L>, ctx: &Context<L>, out: &mut Expansion<L>);
 }
 
+/// The lobe models of a material's slots, in order (a tuple of up to [`MAX_SLOTS`]
+/// built-in models).
+pub trait SlotModels: 'static {
+    /// Each slot's lobe type, by registered name.
+    const NAMES: &'static [&'static str];
+    /// Each slot's model ([`crate::lobes::LobeType::model`]).
+    fn models() -> Vec<TypeId>;
+    /// `visitor.slot::<M>(k)` for each slot `k` in order, with `M` its model; stops at
+    /// the first error.
+    fn visit(visitor: &mut impl SlotVisitor) -> Result<(), Error>;
+}
+
+/// What [`SlotModels::visit`] calls per slot.
+pub trait SlotVisitor {
+    fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error>;
+}
+
+macro_rules! slot_models {
+    ($($m:ident $k:literal),+) => {
+        impl<$($m: Model),+> SlotModels for ($($m,)+) {
+            const NAMES: &'static [&'static str] = &[$($m::NAME),+];
+            fn models() -> Vec<TypeId> {
+                vec![$(TypeId::of::<$m>()),+]
+            }
+            #[inline(always)]
+            fn visit(visitor: &mut impl SlotVisitor) -> Result<(), Error> {
+                $(visitor.slot::<$m>($k)?;)+
+                Ok(())
+            }
+        }
+    };
+}
+
+slot_models!(A 0);
+slot_models!(A 0, B 1);
+slot_models!(A 0, B 1, C 2);
+slot_models!(A 0, B 1, C 2, D 3);
+slot_models!(A 0, B 1, C 2, D 3, E 4);
+slot_models!(A 0, B 1, C 2, D 3, E 4, F 5);
+slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6);
+slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7);
+
 /// A material type as the registry sees it: object-safe, scalar.
 pub trait MaterialType: Send + Sync {
     fn name(&self) -> &str;
     fn summary(&self) -> &str;
     fn params(&self) -> &[ParamSpec];
     fn lobes(&self) -> &[&'static str];
+    /// Each slot's lobe model ([`MaterialModel::Slots`]).
+    fn slot_models(&self) -> Vec<TypeId>;
     fn verify_cases(&self) -> &[VerifyCase];
     fn expand(&self, params: &[f32], ctx: &Context<f32>) -> Expansion<f32>;
+    /// [`Material::emit`] for this type's slots, monomorphized.
+    fn emit(
+        &self,
+        material: &Material,
+        closure: &mut Closure,
+        ctx: &ShadingContext,
+        block: &[f32],
+        scale: Rgb<f32>,
+    ) -> Result<([f32; MAX_LOBES], u32), Error>;
     /// `expand` over staged lanes, in SIMD (material batches).
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>);
 }
@@ -166,7 +225,10 @@ impl<M: MaterialModel> MaterialType for BuiltinMaterial<M> {
         M::PARAMS
     }
     fn lobes(&self) -> &[&'static str] {
-        M::LOBES
+        M::Slots::NAMES
+    }
+    fn slot_models(&self) -> Vec<TypeId> {
+        M::Slots::models()
     }
     fn verify_cases(&self) -> &[VerifyCase] {
         M::VERIFY_CASES
@@ -175,6 +237,16 @@ impl<M: MaterialModel> MaterialType for BuiltinMaterial<M> {
         let mut out = Expansion::default();
         M::expand(Params::new(params), ctx, &mut out);
         out
+    }
+    fn emit(
+        &self,
+        material: &Material,
+        closure: &mut Closure,
+        ctx: &ShadingContext,
+        block: &[f32],
+        scale: Rgb<f32>,
+    ) -> Result<([f32; MAX_LOBES], u32), Error> {
+        compiled::emit::<M>(material, closure, ctx, block, scale)
     }
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>) {
         crate::kernels::expand::expand::<M>(kernels, job);
