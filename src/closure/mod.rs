@@ -741,26 +741,24 @@ pub(crate) fn selection(
         s[0] = 1.0;
         return s;
     }
-    let s = &mut s[..n];
+    let lobes = &mut s[..n];
     let mut sum = 0.0;
-    for (s, &share) in s.iter_mut().zip(shares) {
+    for (s, &share) in lobes.iter_mut().zip(shares) {
         *s = share.max(0.0);
         sum += *s;
     }
     if sum <= 0.0 {
         sum = 0.0;
-        for (k, s) in s.iter_mut().enumerate() {
+        for (k, s) in lobes.iter_mut().enumerate() {
             *s = weight_luminance(k).max(0.0);
             sum += *s;
         }
     }
     if sum <= 0.0 {
-        s.fill(1.0);
+        lobes.fill(1.0);
     }
-    normalize_shares(s);
-    let mut p = [0.0f32; MAX_LOBES];
-    p[..n].copy_from_slice(s);
-    p
+    normalize_shares(lobes);
+    s
 }
 
 /// Scale `shares` (finite, >= 0, not all 0) into probabilities proportional to them.

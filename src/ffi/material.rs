@@ -190,7 +190,7 @@ pub(crate) fn shading_context(c: &glint_shading_context) -> Result<ShadingContex
     })
 }
 
-/// `block` started by the material's values, with the caller's overrides applied.
+/// The caller's overrides applied to `block`, a copy of the material's values.
 ///
 /// # Safety
 /// `overrides` is NULL or valid for `count` entries.
@@ -200,7 +200,6 @@ pub(crate) unsafe fn apply_overrides(
     count: usize,
     block: &mut [f32],
 ) -> Result<(), Error> {
-    block.copy_from_slice(m.params());
     if count == 0 {
         return Ok(());
     }
@@ -466,7 +465,7 @@ pub unsafe extern "C" fn glint_material_closure(
         let (m, runtime) = unsafe { material_ref(material) }?;
         // SAFETY: per the contract.
         let ctx = shading_context(unsafe { deref(context, "context") }?)?;
-        let mut block = [0.0f32; MAX_MATERIAL_PARAMS];
+        let mut block = m.padded_params();
         let block = &mut block[..m.params().len()];
         // SAFETY: per the contract.
         unsafe { apply_overrides(m, overrides, override_count, block) }?;

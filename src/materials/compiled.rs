@@ -31,7 +31,9 @@ pub struct Override {
 pub struct Material {
     kind: &'static dyn MaterialType,
     type_id: u32,
-    params: Vec<f32>,
+    /// The validated block, zero-padded: a point's copy is one fixed-size move.
+    params: [f32; MAX_MATERIAL_PARAMS],
+    param_count: usize,
     /// Each schema entry's value (element 0), resolved here so that per-point overrides
     /// by entry index skip `params::locate`; None for group and table headers.
     entries: Box<[Option<params::Slot<'static>>]>,
@@ -72,13 +74,15 @@ impl Material {
                 ),
             ));
         }
-        let mut block = vec![0.0; params::block_size(specs)];
+        let param_count = params::block_size(specs);
+        let mut padded = [0.0; MAX_MATERIAL_PARAMS];
+        let block = &mut padded[..param_count];
         match params {
             Some(values) => {
                 params::validate(kind.name(), specs, values)?;
                 block.copy_from_slice(values);
             }
-            None => params::write_defaults(specs, &mut block),
+            None => params::write_defaults(specs, block),
         }
         let slots = kind
             .lobes()
@@ -121,11 +125,12 @@ impl Material {
             *len = params::block_size(lobe.params());
         }
         let shape_ids = shape_ids(&slots)?;
-        let decoded_defaults = decoded_defaults(kind, &block, &slots, &block_lens);
+        let decoded_defaults = decoded_defaults(kind, block, &slots, &block_lens);
         Ok(Material {
             kind,
             type_id,
-            params: block,
+            params: padded,
+            param_count,
             entries,
             slots,
             block_lens,
@@ -145,7 +150,12 @@ impl Material {
 
     /// The compiled parameter block (overrides are applied to a copy per point).
     pub fn params(&self) -> &[f32] {
-        &self.params
+        &self.params[..self.param_count]
+    }
+
+    /// The compiled block followed by zeros: a point's copy to apply overrides to.
+    pub fn padded_params(&self) -> [f32; MAX_MATERIAL_PARAMS] {
+        self.params
     }
 
     /// The pruning threshold.
@@ -163,7 +173,7 @@ impl Material {
     /// ([`params::address`]: an entry, or an element of an array or table column).
     /// Errors name the override and the parameter's path.
     pub fn apply(&self, overrides: &[Override], out: &mut [f32]) -> Result<(), Error> {
-        out.copy_from_slice(&self.params);
+        out.copy_from_slice(self.params());
         for (i, o) in overrides.iter().enumerate() {
             self.apply_one(i, o, out)?;
         }
@@ -282,7 +292,7 @@ impl Material {
         overrides: &[Override],
     ) -> Result<(), Error> {
         let mut block = [0.0f32; MAX_MATERIAL_PARAMS];
-        let block = &mut block[..self.params.len()];
+        let block = &mut block[..self.param_count];
         self.apply(overrides, block)?;
         self.build_closure_from(closure, ctx, block)
     }
