@@ -425,14 +425,14 @@ fn wrong_types() {
 /// limit named, and one that fits is expanded after the lobes before it.
 #[test]
 fn a_material_past_the_lobe_limit_is_refused() {
-    let lobes = vec![r#"{"type": "lambert"}"#; 15].join(",");
+    let lobes = [r#"{"type": "lambert"}"#; 15].join(",");
     let disney = r#"{"material": "disney", "clearcoat": 1, "sheen": 1}"#;
     expect_error(
         &format!(r#"{{"lobes": [{lobes}, {disney}]}}"#),
         Status::ClosureFull,
         &["16"],
     );
-    let lobes = vec![r#"{"type": "lambert"}"#; 12].join(",");
+    let lobes = [r#"{"type": "lambert"}"#; 12].join(",");
     let c = parse(&format!(r#"{{"lobes": [{lobes}, {disney}]}}"#)).unwrap();
     assert!(c.lobes().len() > 13 && c.lobes().len() <= 16);
 }

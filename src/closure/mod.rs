@@ -761,9 +761,19 @@ pub(crate) fn selection(
     s
 }
 
-/// Scale `shares` (finite, >= 0, not all 0) into probabilities proportional to them.
-/// They are divided by the largest first, so their sum cannot overflow.
+/// Scale `shares` (finite, >= 0, not all 0) into probabilities proportional to them:
+/// times the reciprocal of their sum (summed in order), one division. Where the sum or
+/// its reciprocal is not finite (shares near the largest or the smallest floats) they
+/// are divided by the largest first, then by their sum.
 fn normalize_shares(shares: &mut [f32]) {
+    let total = shares.iter().fold(0.0f32, |t, &s| t + s);
+    let inv = 1.0 / total;
+    if total.is_finite() && inv.is_finite() {
+        for p in shares.iter_mut() {
+            *p *= inv;
+        }
+        return;
+    }
     let largest = shares.iter().fold(0.0f32, |m, &s| m.max(s));
     let mut total = 0.0f32;
     for p in shares.iter_mut() {
@@ -803,6 +813,16 @@ fn no_sample() -> Error {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shares_near_the_smallest_float_normalize_without_overflow() {
+        // Their sum's reciprocal overflows: the fallback divides by the largest.
+        let mut p = [1e-44, 3e-44, 0.0];
+        normalize_shares(&mut p);
+        assert!(p.iter().all(|p| p.is_finite()), "{p:?}");
+        assert!((p[1] / p[0] - 3.0).abs() < 0.2 && p[2] == 0.0, "{p:?}");
+        assert!((p.iter().sum::<f32>() - 1.0).abs() <= 1e-6, "{p:?}");
+    }
 
     #[test]
     fn shares_near_the_largest_float_normalize_without_overflow() {

@@ -133,7 +133,7 @@ fn select_slots<L: Lane, const COUNT: usize>(job: &mut SelectJob<'_>) {
             share_sum += keep[k] * share[k].max(zero);
             weight_sum += keep[k] * weight[k].luminance().max(zero);
         }
-        let mut largest = zero;
+        let (mut largest, mut total) = (zero, zero);
         for k in 0..COUNT {
             let by = L::select(
                 share_sum.gt(zero),
@@ -142,18 +142,32 @@ fn select_slots<L: Lane, const COUNT: usize>(job: &mut SelectJob<'_>) {
             );
             keep[k] *= L::select(n.eq(one), one, by);
             largest = largest.max(keep[k]);
+            total += keep[k];
         }
-        // `normalize_shares`: divided by the largest, then by the sum in slot order. A
-        // lane without any emitted slot keeps zeros.
-        let largest = L::select(largest.gt(zero), largest, one);
-        let mut total = zero;
-        for p in &mut keep {
-            *p = *p / largest;
-            total += *p;
+        // `normalize_shares`: times the reciprocal of the sum in slot order, or where
+        // that is not finite divided by the largest, then by the sum. A lane without
+        // any emitted slot keeps zeros.
+        let inv = one / total;
+        let direct = total.is_finite() & inv.is_finite();
+        if direct.all() {
+            for p in &mut keep {
+                *p *= inv;
+            }
+        } else {
+            let largest = L::select(largest.gt(zero), largest, one);
+            let mut scaled_total = zero;
+            let mut scaled = keep;
+            for p in &mut scaled {
+                *p = *p / largest;
+                scaled_total += *p;
+            }
+            let scaled_total = L::select(scaled_total.gt(zero), scaled_total, one);
+            for (p, s) in keep.iter_mut().zip(scaled) {
+                *p = L::select(direct, *p * inv, s / scaled_total);
+            }
         }
-        let total = L::select(total.gt(zero), total, one);
         for k in 0..COUNT {
-            let p = keep[k] / total;
+            let p = keep[k];
             let on = p.gt(zero);
             job.kept[k] |= on.any();
             p.store(&mut job.probability[k * len + i..]);
