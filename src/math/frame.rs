@@ -39,6 +39,7 @@ impl Frame {
     /// missing, not finite, or its part perpendicular to `n` is below
     /// [`Self::PARALLEL_TANGENT`] of its length (nothing left of it but rounding), one is
     /// chosen with Duff et al. 2017 ("Building an Orthonormal Basis, Revisited").
+    #[inline]
     pub fn new(n: Vec3<f32>, tangent: Option<Vec3<f32>>) -> Frame {
         let n64 = F64::from(n);
         let t = tangent.map(F64::from).and_then(|t| {

@@ -210,6 +210,7 @@ impl<L: Lane> Mul<L> for Rgb<L> {
 impl Vec3<f32> {
     /// A unit vector from user input: rejects NaN, infinities and vectors too short
     /// to normalize reliably (length below 1e-12), naming `what` in the error.
+    #[inline]
     pub fn try_unit(x: f32, y: f32, z: f32, what: &str) -> Result<Self, crate::error::Error> {
         use crate::error::{Error, Status};
         if !(x.is_finite() && y.is_finite() && z.is_finite()) {
