@@ -3,8 +3,8 @@
 //! expansion, pruning and the closure.
 
 use super::{
-    Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, MaterialType, ShadingContext, SlotModels,
-    SlotVisitor,
+    Emitted, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, MaterialType, ShadingContext,
+    SlotModels, SlotVisitor,
 };
 use crate::closure::{Closure, MAX_LOBES};
 use crate::error::{Error, Status};
@@ -306,25 +306,22 @@ impl Material {
         block: &[f32],
     ) -> Result<(), Error> {
         closure.restart(Some(ctx.wo), Transport::Radiance);
-        let (shares, emitted) = self.emit(closure, ctx, block, Rgb::new(1.0, 1.0, 1.0))?;
-        let kept = emitted.count_ones() as usize;
-        let shape_id = self.shape_ids.get(emitted as usize).copied();
-        closure.finish_with_shares(&shares[..kept], shape_id)
+        let e = self.emit(closure, ctx, block, Rgb::new(1.0, 1.0, 1.0))?;
+        let kept = e.slots.count_ones() as usize;
+        let shape_id = self.shape_ids.get(e.slots as usize).copied();
+        closure.finish_with_shares(&e.shares[..kept], shape_id)
     }
 
     /// Add the lobes of one shading point (`block`: the parameters with its overrides
     /// applied) to the open `closure`, their weights scaled by `scale`: expansion, then
-    /// pruning. Returns each added lobe's `luminance(weight * albedo(wo))` with its
-    /// albedo estimate, as `Closure::finish` would compute it, and the set of emitted
-    /// slots (bit `k` for slot `k`; at least one: when every lobe is below the
-    /// threshold, the strongest is kept).
+    /// pruning.
     pub(crate) fn emit(
         &self,
         closure: &mut Closure,
         ctx: &ShadingContext,
         block: &[f32],
         scale: Rgb<f32>,
-    ) -> Result<([f32; MAX_LOBES], u32), Error> {
+    ) -> Result<Emitted, Error> {
         self.kind.emit(self, closure, ctx, block, scale)
     }
 
@@ -344,7 +341,7 @@ pub(crate) fn emit<M: MaterialModel>(
     ctx: &ShadingContext,
     block: &[f32],
     scale: Rgb<f32>,
-) -> Result<([f32; MAX_LOBES], u32), Error> {
+) -> Result<Emitted, Error> {
     let local = ctx.lanes();
     let mut expansion = Expansion::default();
     M::expand(Params::new(block), &local, &mut expansion);
@@ -378,7 +375,10 @@ pub(crate) fn emit<M: MaterialModel>(
         shares[0] = share;
         emitted = 1 << k;
     }
-    Ok((shares, emitted))
+    Ok(Emitted {
+        shares,
+        slots: emitted,
+    })
 }
 
 /// [`emit`]'s walk over the slots.

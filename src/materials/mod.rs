@@ -176,6 +176,17 @@ slot_models!(A 0, B 1, C 2, D 3, E 4, F 5);
 slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6);
 slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7);
 
+/// The lobes one shading point's expansion added to a closure.
+#[derive(Clone, Copy, Debug)]
+pub struct Emitted {
+    /// Each added lobe's `luminance(weight * albedo estimate(wo))`, in order, as
+    /// `Closure::finish` would compute it.
+    pub shares: [f32; MAX_LOBES],
+    /// The emitted slots: bit `k` for slot `k` (at least one: when every lobe is below
+    /// the threshold, the strongest is kept).
+    pub slots: u32,
+}
+
 /// A material type as the registry sees it: object-safe, scalar.
 pub trait MaterialType: Send + Sync {
     fn name(&self) -> &str;
@@ -194,7 +205,7 @@ pub trait MaterialType: Send + Sync {
         ctx: &ShadingContext,
         block: &[f32],
         scale: Rgb<f32>,
-    ) -> Result<([f32; MAX_LOBES], u32), Error>;
+    ) -> Result<Emitted, Error>;
     /// `expand` over staged lanes, in SIMD (material batches).
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>);
 }
@@ -245,7 +256,7 @@ impl<M: MaterialModel> MaterialType for BuiltinMaterial<M> {
         ctx: &ShadingContext,
         block: &[f32],
         scale: Rgb<f32>,
-    ) -> Result<([f32; MAX_LOBES], u32), Error> {
+    ) -> Result<Emitted, Error> {
         compiled::emit::<M>(material, closure, ctx, block, scale)
     }
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>) {
