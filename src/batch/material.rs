@@ -3,12 +3,13 @@
 //!
 //! A block is cut into chunks of [`CHUNK`] active lanes. Each chunk stages, per lane,
 //! the unit `wo`, the shading frame and the parameter block with the lane's overrides,
-//! expands it (`MaterialModel::expand`, the same code as `Material::build_closure`)
-//! into per-slot SoA rows of decoded lobe blocks and weights, and runs each slot's
-//! lobe kernels over the rows (`LobeLanes::PerLane`): first the albedo estimate, whose
-//! `luminance(weight * albedo)` prunes the slot per lane and sets the selection
-//! probabilities by the closure's rule (`closure::selection`), then eval, pdf or
-//! sample. A lane's result is that of the closure `glint_material_closure` builds for
+//! and expands it in one SIMD pass (`kernels::expand`: `MaterialModel::expand`, the
+//! same code as `Material::build_closure`, then each slot's block decoded and its
+//! albedo estimate, whose `luminance(weight * albedo)` prunes the slot per lane and
+//! sets the selection probabilities by the closure's rule, `closure::selection`) into
+//! per-slot SoA rows of decoded lobe blocks, weights and probabilities. Then each
+//! slot's lobe kernels run over the rows (`LobeLanes::PerLane`, or one fused kernel
+//! for all of them): eval, pdf or sample. A lane's result is that of the closure `glint_material_closure` builds for
 //! it, up to the batch kernels' rounding; slots every lane pruned are skipped.
 
 use super::stage::{
@@ -22,14 +23,13 @@ use crate::closure::SampleResult;
 use crate::error::{Error, Status};
 use crate::kernels::expand::ExpandJob;
 use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, OwnRows};
-use crate::kernels::material_rows::{self, ChooseJob, SelectJob};
+use crate::kernels::material_rows::{self, ChooseJob};
 use crate::kernels::{
     AlbedoJob, Directions, EvalJob, FinishJob, FinishLobe, LobeLanes, SampleJob, finish_mixture,
 };
-use crate::lobes::LobeType;
 use crate::lobes::Transport;
 use crate::materials::compiled::MAX_MATERIAL_PARAMS;
-use crate::materials::{MAX_SLOT_PARAMS, MAX_SLOTS, Material};
+use crate::materials::{MAX_SLOTS, Material};
 use crate::math::{Frame, Vec3};
 use crate::params::{self, ParamKind};
 use crate::simd::Kernels;
@@ -110,9 +110,6 @@ pub(super) struct SlotRows {
     normal: [Vec<f32>; 3],
     /// `wo` in each lane's shading frame.
     local_wo: [Vec<f32>; 3],
-    /// The blocks `expand` writes: slot `k`'s value `p` of lane `j` at
-    /// `(k * MAX_SLOT_PARAMS + p) * len + j`.
-    raw: Vec<f32>,
     /// Decoded blocks: slot `k`'s value `p` of lane `j` at `(k * MAX_PARAMS + p) * len + j`.
     params: Vec<f32>,
     weight: Vec<f32>,
@@ -120,7 +117,7 @@ pub(super) struct SlotRows {
     frame: Vec<f32>,
     /// Each slot's `weight * albedo(wo)`, laid out as `weight`.
     albedo: Vec<f32>,
-    /// Whether any lane emits the slot.
+    /// Whether any lane keeps the slot.
     live: [bool; MAX_SLOTS],
 }
 
@@ -133,7 +130,6 @@ impl SlotRows {
         for row in self.local_wo.iter_mut().chain(&mut self.normal) {
             super::stage::reserve(row, len)?;
         }
-        super::stage::reserve(&mut self.raw, MAX_SLOTS * MAX_SLOT_PARAMS * len)?;
         super::stage::reserve(&mut self.params, MAX_SLOTS * MAX_PARAMS * len)?;
         super::stage::reserve(&mut self.weight, MAX_SLOTS * 3 * len)?;
         super::stage::reserve(&mut self.probability, MAX_SLOTS * len)?;
@@ -168,7 +164,7 @@ impl SlotRows {
 
 /// Stage the chunk's lanes `lanes` (`len` padded): unit `wo` into `s.wo`, frames and
 /// per-lane material blocks; then the expansion in SIMD, each slot's blocks decoded,
-/// and each slot's albedo prunes it and sets the selection probabilities. Lanes with
+/// pruned by its albedo estimate and given its selection probability. Lanes with
 /// invalid inputs are flagged in `s.failed` and staged with valid stand-ins.
 fn stage_chunk(
     kernels: Kernels,
@@ -179,7 +175,6 @@ fn stage_chunk(
     errors: &mut LaneError,
 ) -> Result<(), Error> {
     let material = input.material;
-    let slots = material.slots();
     let block_len = material.params().len();
     s.reserve_rows(len)?;
     super::stage::reserve(&mut s.failed, len)?;
@@ -202,58 +197,25 @@ fn stage_chunk(
         errors,
     );
     any |= stage_frames(kernels, input, lanes, len, &s.wo, rows, failed, errors);
-    any |= stage_blocks(input, lanes, len, rows, failed, errors);
-    s.any_failed = any;
-    let mut block_lens = [0; MAX_SLOTS];
-    for (b, (_, lobe)) in block_lens.iter_mut().zip(slots) {
-        *b = params::block_size(lobe.params());
-    }
-    material.kind().expand_lanes(
-        kernels,
-        &mut ExpandJob {
-            len,
-            params: &rows.input[..block_len * len],
-            param_count: block_len,
-            wo: view3(&rows.local_wo, len),
-            block_len: block_lens,
-            weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
-            blocks: grow(&mut rows.raw, MAX_SLOTS * MAX_SLOT_PARAMS * len),
-        },
-    );
-    let params = grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len);
-    for (k, (_, lobe)) in slots.iter().enumerate() {
-        let raw = &rows.raw[k * MAX_SLOT_PARAMS * len..][..block_lens[k] * len];
-        let decoded = &mut params[k * MAX_PARAMS * len..][..lobe.decoded_len() * len];
-        decode_slot(&**lobe, raw, decoded, len, lanes.len());
-    }
-    prune(kernels, input.material, len, s)
-}
-
-/// `lobe.decode_rows`, or one `decode` filled over the rows when the chunk's `n` lanes
-/// share the block (a parameter no lane overrides, as the clearcoat's gloss usually
-/// is: its decode takes logarithms in f64). Padding lanes get the same valid block.
-fn decode_slot(lobe: &dyn LobeType, raw: &[f32], decoded: &mut [f32], len: usize, n: usize) {
-    // Sixteen lanes at a time, without a branch per lane.
-    let shared = raw.chunks_exact(len).all(|row| {
-        let first = row[0].to_bits();
-        row[..n]
-            .chunks(16)
-            .all(|c| c.iter().fold(true, |same, v| same & (v.to_bits() == first)))
-    });
-    if !shared {
-        lobe.decode_rows(raw, decoded, len);
-        return;
-    }
-    let mut block = [0.0f32; MAX_SLOT_PARAMS];
-    for (v, row) in block.iter_mut().zip(raw.chunks_exact(len)) {
-        *v = row[0];
-    }
-    let mut out = [0.0f32; MAX_PARAMS];
-    let out = &mut out[..decoded.len() / len];
-    lobe.decode(&block[..raw.len() / len], out);
-    for (row, &v) in decoded.chunks_exact_mut(len).zip(&*out) {
-        row.fill(v);
-    }
+    let (failed_override, per_lane) = stage_blocks(input, lanes, len, rows, failed, errors);
+    s.any_failed = any | failed_override;
+    let mut job = ExpandJob {
+        len,
+        params: &rows.input[..block_len * len],
+        material: material.params(),
+        per_lane,
+        wo: view3(&rows.local_wo, len),
+        block_len: *material.block_lens(),
+        prune: material.prune(),
+        known: material.decoded_defaults(),
+        decoded: grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len),
+        weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
+        probability: grow(&mut rows.probability, MAX_SLOTS * len),
+        kept: [false; MAX_SLOTS],
+    };
+    material.kind().expand_lanes(kernels, &mut job);
+    rows.live = job.kept;
+    Ok(())
 }
 
 /// Each lane's shading frame (from the staged normal and the caller's tangent, as
@@ -316,11 +278,12 @@ fn split3(v: &mut [f32]) -> [&mut [f32]; 3] {
     [x, y, z]
 }
 
-/// Each lane's material block with its overrides into the block rows: rows of the
-/// material's values, the overrides gathered over them and range-checked row by row
-/// (lane by lane, for the error, only when a row fails). Lanes that fail here or
-/// failed before get the material's own block, a valid stand-in. Returns whether an
-/// override failed.
+/// The overrides into the block rows: each overridden value's row gathered and
+/// range-checked row by row (lane by lane, for the error, only when a row fails), its
+/// padding the material's value. Lanes that fail here or failed before get the
+/// material's own values, a valid stand-in. The rows of values no override sets are
+/// not written: every lane has the material's. Returns whether an override failed,
+/// and which values have rows.
 fn stage_blocks(
     input: &MaterialInput<'_>,
     lanes: &[u32],
@@ -328,19 +291,20 @@ fn stage_blocks(
     rows: &mut SlotRows,
     failed: &mut [u8],
     errors: &mut LaneError,
-) -> bool {
+) -> (bool, [bool; MAX_MATERIAL_PARAMS]) {
     let material = input.material;
     let (specs, defaults) = (material.kind().params(), material.params());
     let blocks = grow(&mut rows.input, defaults.len() * len);
     let n = lanes.len();
-    // The material's values; rows an override gathers over get them in padding only.
     let mut overridden = [false; MAX_MATERIAL_PARAMS];
     for o in input.overrides {
         let at = params::offset_of(specs, o.param as usize);
         overridden[at..at + o.kind.size()].fill(true);
     }
     for ((row, &v), &o) in blocks.chunks_exact_mut(len).zip(defaults).zip(&overridden) {
-        row[if o { n } else { 0 }..].fill(v);
+        if o {
+            row[n..].fill(v);
+        }
     }
     let mut any = false;
     for (i, o) in input.overrides.iter().enumerate() {
@@ -372,12 +336,12 @@ fn stage_blocks(
     // Failed lanes, here or before.
     if failed[..n].contains(&1) {
         for j in (0..n).filter(|&j| failed[j] != 0) {
-            for (p, &v) in defaults.iter().enumerate() {
+            for (p, &v) in defaults.iter().enumerate().filter(|&(p, _)| overridden[p]) {
                 blocks[p * len + j] = v;
             }
         }
     }
-    any
+    (any, overridden)
 }
 
 /// `row[j] = src[lanes[j]]`.
@@ -394,15 +358,13 @@ fn gather(row: &mut [f32], src: &[f32], lanes: &[u32]) {
     }
 }
 
-/// Each live slot's `weight * albedo(wo)` into the albedo rows: the albedo estimates
-/// that selection and pruning weigh slots by, or the albedos.
+/// Each live slot's `weight * albedo(wo)` into the albedo rows.
 fn slot_albedos(
     kernels: Kernels,
     material: &Material,
     len: usize,
     s: &mut Scratch,
     live: &[bool; MAX_SLOTS],
-    estimate: bool,
 ) {
     let rows = &mut s.material;
     // Out of the rows while the kernels read them, put back at the end.
@@ -423,47 +385,13 @@ fn slot_albedos(
             wo: view3(&s.wo, len),
             lobe: rows.lanes(k, lobe.decoded_len(), len),
             store: true,
-            estimate,
+            estimate: false,
             value: [r, g, b],
             out_of_range: false,
         };
         lobe.albedo_lanes(kernels, &mut job);
     }
     rows.albedo = albedo_rows;
-}
-
-/// Each slot's `weight * albedo estimate(wo)`, then per lane the closure's pruning and
-/// selection rules (`Material::emit`, `closure::selection`) in SIMD: the same
-/// operations in the same order, so the same probabilities. Dropped slots' weights
-/// become 0.
-fn prune(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> Result<(), Error> {
-    let slots = material.slots();
-    let mut live = [false; MAX_SLOTS];
-    for (k, l) in live.iter_mut().enumerate().take(slots.len()) {
-        // Emitted on some lane: any weight channel > 0.
-        *l = s.material.weight[k * 3 * len..(k + 1) * 3 * len]
-            .iter()
-            .any(|&w| w > 0.0);
-    }
-    slot_albedos(kernels, material, len, s, &live, true);
-    let rows = &mut s.material;
-    // Out of the rows while the kernel reads them, put back at the end.
-    let mut albedo_rows = std::mem::take(&mut rows.albedo);
-    let albedo = grow(&mut albedo_rows, MAX_SLOTS * 3 * len);
-    let mut job = SelectJob {
-        len,
-        count: slots.len(),
-        live,
-        prune: material.prune(),
-        albedo,
-        weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
-        probability: grow(&mut rows.probability, MAX_SLOTS * len),
-        kept: [false; MAX_SLOTS],
-    };
-    material_rows::select(kernels, &mut job);
-    rows.live = job.kept;
-    rows.albedo = albedo_rows;
-    Ok(())
 }
 
 /// The chunks of active lanes of `range`: `f(lanes)` for each.
@@ -776,7 +704,7 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
                 // The kept slots' `weight * albedo` (a dropped slot's weight is 0 on its
                 // lane); pruning weighed them by estimates.
                 let live = s.material.live;
-                slot_albedos(exec.kernels, input.material, len, s, &live, false);
+                slot_albedos(exec.kernels, input.material, len, s, &live);
                 let sum = rows3(&mut s.value, len);
                 let rows = &s.material;
                 for row in sum {

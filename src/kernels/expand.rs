@@ -1,42 +1,160 @@
-//! A material's `expand` over staged lanes: the per-lane parameter blocks (overrides
-//! applied) and `wo` in each lane's shading frame in, each slot's weight and lobe block
-//! out, one register of lanes at a time ([`MaterialModel::expand`] is written once
-//! over the lane type).
+//! A material's expansion over staged lanes, one register at a time and in one pass:
+//! `expand` ([`MaterialModel::expand`], written once over the lane type) from the
+//! per-lane parameter blocks (overrides applied) and `wo` in each lane's shading frame;
+//! each slot's block decoded and its albedo estimated; then pruning and selection
+//! ([`super::material_rows::select`]). The slots' models are known statically
+//! ([`MaterialModel::Slots`]), so every slot's decode, estimate and block sizes are
+//! inlined, and nothing between the expansion and the selection leaves the registers.
+//! Each step is the closure's (`materials::compiled::emit`), operation for operation,
+//! so the rows hold the bits a closure per lane would.
 
-use crate::lobes::Params;
-use crate::materials::compiled::MAX_MATERIAL_PARAMS;
-use crate::materials::{Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, SlotModels};
-use crate::math::{Lane, Rgb, Vec3};
+use super::material_rows;
+use crate::error::Error;
+use crate::lobes::{MAX_DECODED_LEN, Model, Params, Transport};
+use crate::materials::compiled::{DecodedBlock, MAX_MATERIAL_PARAMS};
+use crate::materials::{
+    Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, SlotModels, SlotVisitor,
+};
+use crate::math::lane::MAX_LANES;
+use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::params::block_size;
 use crate::simd::kernel;
 
 /// Inputs and outputs of an expansion over `len` staged lanes (a multiple of
 /// [`super::LANE_MULTIPLE`]).
 pub struct ExpandJob<'a> {
     pub len: usize,
-    /// The material's blocks: value `p` of lane `j` at `p * len + j`.
+    /// The material's values, each lane's where `per_lane` says so: value `p` of lane
+    /// `j` at `p * len + j`.
     pub params: &'a [f32],
-    pub param_count: usize,
+    /// The material's own block: the values without rows.
+    pub material: &'a [f32],
+    /// The values with rows in `params` (overridden on some lane).
+    pub per_lane: [bool; MAX_MATERIAL_PARAMS],
     /// Unit `wo` in each lane's shading frame.
     pub wo: [&'a [f32]; 3],
-    /// Values of each slot's lobe block (the rest of its rows are not written).
+    /// Each slot's raw block length.
     pub block_len: [usize; MAX_SLOTS],
-    /// Slot `k`'s weight, channel `c` of lane `j` at `(3 k + c) len + j`.
+    /// `Material::prune`: a slot whose share is below it is dropped.
+    pub prune: f32,
+    /// Decoded blocks known beforehand (`Material::decoded_defaults`): lanes whose slot
+    /// block is one of them copy it instead of decoding.
+    pub known: &'a [Option<DecodedBlock>],
+    /// Slot `k`'s decoded block, value `p` of lane `j` at `(k MAX_DECODED_LEN + p) len + j`.
+    pub decoded: &'a mut [f32],
+    /// Slot `k`'s weight, channel `c` of lane `j` at `(3 k + c) len + j`; zero where
+    /// the slot is dropped.
     pub weight: &'a mut [f32],
-    /// Slot `k`'s block, value `p` of lane `j` at `(k MAX_SLOT_PARAMS + p) len + j`.
-    pub blocks: &'a mut [f32],
+    /// Slot `k`'s selection probability of lane `j` at `k len + j` (0 where dropped).
+    pub probability: &'a mut [f32],
+    /// Out: slots with a nonzero probability on some lane.
+    pub kept: [bool; MAX_SLOTS],
+}
+
+/// One register's slots: decoded into the rows, estimated.
+struct Slots<'j, L> {
+    i: usize,
+    len: usize,
+    wo: Vec3<L>,
+    expansion: &'j Expansion<L>,
+    /// The last block each slot decoded (or the known one).
+    cache: &'j mut [Option<DecodedBlock>; MAX_SLOTS],
+    decoded: &'j mut [f32],
+    share: [L; MAX_SLOTS],
+}
+
+impl<L: Lane> SlotVisitor for Slots<'_, L> {
+    #[inline(always)]
+    fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
+        let raw = &self.expansion.params[k][..block_size(M::PARAMS)];
+        let mut decoded = [L::zero(); MAX_DECODED_LEN];
+        let decoded = &mut decoded[..M::DECODED_LEN];
+        if M::DECODE_COPIES && raw.len() == decoded.len() {
+            decoded.copy_from_slice(raw);
+        } else {
+            decode::<M, L>(raw, decoded, &mut self.cache[k]);
+        }
+        let (len, i) = (self.len, self.i);
+        for (p, v) in decoded.iter().enumerate() {
+            v.store(&mut self.decoded[(k * MAX_DECODED_LEN + p) * len + i..]);
+        }
+        let weight = self.expansion.weight[k];
+        let zero = L::zero();
+        let emitted = weight.r.gt(zero) | weight.g.gt(zero) | weight.b.gt(zero);
+        if emitted.any() {
+            let p = M::prepare(Params::new(decoded));
+            let albedo = M::albedo_estimate(&p, self.wo, Transport::Radiance);
+            self.share[k] = L::select(emitted, (weight * albedo).luminance(), zero);
+        }
+        Ok(())
+    }
+}
+
+/// `M::decode` of each lane's `raw` block into `out`: lanes whose block is `cache`'s
+/// copy its decoded block; the others decode, one at a time, and become the cache.
+#[inline(always)]
+fn decode<M: Model, L: Lane>(raw: &[L], out: &mut [L], cache: &mut Option<DecodedBlock>) {
+    let mut lanes = [[0.0f32; MAX_LANES]; MAX_SLOT_PARAMS];
+    for (row, v) in lanes.iter_mut().zip(raw) {
+        v.store(row);
+    }
+    let block = |j: usize| {
+        let mut b = [0.0f32; MAX_SLOT_PARAMS];
+        for (v, row) in b.iter_mut().zip(&lanes) {
+            *v = row[j];
+        }
+        b
+    };
+    let n = raw.len();
+    if let Some(c) = cache.filter(|c| (0..L::LANES).all(|j| c.decodes(&block(j)[..n]))) {
+        for (o, &v) in out.iter_mut().zip(&c.decoded) {
+            *o = L::splat(v);
+        }
+        return;
+    }
+    let mut decoded = [[0.0f32; MAX_LANES]; MAX_DECODED_LEN];
+    for j in 0..L::LANES {
+        let b = block(j);
+        let c = match cache.take() {
+            Some(c) if c.decodes(&b[..n]) => c,
+            _ => {
+                let mut c = DecodedBlock {
+                    raw: b,
+                    decoded: [0.0; MAX_DECODED_LEN],
+                };
+                M::decode(&c.raw[..n], &mut c.decoded[..out.len()]);
+                c
+            }
+        };
+        for (row, &v) in decoded.iter_mut().zip(&c.decoded[..out.len()]) {
+            row[j] = v;
+        }
+        *cache = Some(c);
+    }
+    for (o, row) in out.iter_mut().zip(&decoded) {
+        *o = L::load(row);
+    }
 }
 
 #[inline(always)]
 fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     let len = job.len;
-    debug_assert!(len.is_multiple_of(L::LANES) && job.param_count <= MAX_MATERIAL_PARAMS);
-    let slots = M::Slots::NAMES.len();
+    let param_count = job.material.len();
+    debug_assert!(len.is_multiple_of(L::LANES) && param_count <= MAX_MATERIAL_PARAMS);
+    let count = M::Slots::NAMES.len();
+    let mut cache = [None; MAX_SLOTS];
+    cache[..job.known.len()].copy_from_slice(job.known);
     let mut raw = [L::zero(); MAX_MATERIAL_PARAMS];
+    for (r, &v) in raw.iter_mut().zip(job.material) {
+        *r = L::splat(v);
+    }
     let zero = Vec3::new(L::zero(), L::zero(), L::zero());
     let mut e = Expansion::<L>::default();
     for i in (0..len).step_by(L::LANES) {
-        for (p, r) in raw[..job.param_count].iter_mut().enumerate() {
-            *r = L::load(&job.params[p * len + i..]);
+        for (p, r) in raw[..param_count].iter_mut().enumerate() {
+            if job.per_lane[p] {
+                *r = L::load(&job.params[p * len + i..]);
+            }
         }
         // Material batches take no positions, footprints or uvs: zero, as a context
         // that leaves them unset.
@@ -53,26 +171,38 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
         };
         // What is read back starts at zero for each register, as a fresh `Expansion`
         // would (zeroing all of it costs more than the expansion).
-        for k in 0..slots {
+        for k in 0..count {
             e.weight[k] = Rgb::zero();
             for v in &mut e.params[k][..job.block_len[k]] {
                 *v = L::zero();
             }
         }
-        M::expand(Params::new(&raw[..job.param_count]), &ctx, &mut e);
-        for k in 0..slots {
-            let Rgb { r, g, b } = e.weight[k];
-            r.store(&mut job.weight[3 * k * len + i..]);
-            g.store(&mut job.weight[(3 * k + 1) * len + i..]);
-            b.store(&mut job.weight[(3 * k + 2) * len + i..]);
-            for (p, v) in e.params[k][..job.block_len[k]].iter().enumerate() {
-                v.store(&mut job.blocks[(k * MAX_SLOT_PARAMS + p) * len + i..]);
+        M::expand(Params::new(&raw[..param_count]), &ctx, &mut e);
+        let mut slots = Slots {
+            i,
+            len,
+            wo: ctx.wo,
+            expansion: &e,
+            cache: &mut cache,
+            decoded: job.decoded,
+            share: [L::zero(); MAX_SLOTS],
+        };
+        M::Slots::visit(&mut slots).expect("a slot's staging does not fail");
+        let share = slots.share;
+        let mut weight = e.weight;
+        let probability = material_rows::select(count, job.prune, &share, &mut weight);
+        for k in 0..count {
+            let p = probability[k];
+            job.kept[k] |= p.gt(L::zero()).any();
+            p.store(&mut job.probability[k * len + i..]);
+            for (c, v) in weight[k].to_array().into_iter().enumerate() {
+                v.store(&mut job.weight[(3 * k + c) * len + i..]);
             }
         }
     }
 }
 
 kernel!(
-    /// `M::expand` over a job's lanes.
+    /// `M::expand` over a job's lanes, with each slot decoded, pruned and selected.
     expand<M: MaterialModel>(job: &mut ExpandJob<'_>) => expand_body
 );

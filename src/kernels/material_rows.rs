@@ -5,8 +5,8 @@
 //! in the same order (`Frame::new`, `Material::emit`, `closure::selection`,
 //! `mixture::choose`), so the rows hold the bits a closure per lane would.
 
+use super::load_row3;
 use super::mixture::clamp_random;
-use super::{load_row3, rgb_at};
 use crate::materials::MAX_SLOTS;
 use crate::math::frame::duff_axes;
 use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
@@ -54,129 +54,84 @@ fn to_frames_body<L: Lane>(frame: &[f32], wo: [&[f32]; 3], local: &mut [&mut [f3
     }
 }
 
-/// Pruning and selection over a chunk's slots.
-pub struct SelectJob<'a> {
-    /// Lanes, a multiple of [`super::LANE_MULTIPLE`].
-    pub len: usize,
-    /// The material's slots.
-    pub count: usize,
-    /// Slots whose `albedo` rows are written (the others emit on no lane).
-    pub live: [bool; MAX_SLOTS],
-    /// `Material::prune`: a slot whose share is below it is dropped.
-    pub prune: f32,
-    /// `weight * albedo(wo)` of slot `k`, channel `c` of lane `j` at `(3 k + c) len + j`.
-    pub albedo: &'a [f32],
-    /// Slot weights, laid out as `albedo`; zeroed where the slot is dropped.
-    pub weight: &'a mut [f32],
-    /// Selection probability of slot `k` of lane `j` at `k len + j` (0 where dropped).
-    pub probability: &'a mut [f32],
-    /// Out: slots with a nonzero probability on some lane.
-    pub kept: [bool; MAX_SLOTS],
-}
-
-/// [`select_slots`] with the slot count a constant, so its loops unroll and its
-/// per-slot values stay in registers.
+/// One register's pruning and selection over a material's first `count` slots, by
+/// the closure's rules (`Material::emit`, `closure::selection`) with the same
+/// operations in the same order, so the same probabilities: `share[k]` is slot `k`'s
+/// `luminance(weight * albedo estimate(wo))` (0 where it is not emitted, that is where
+/// no weight channel is > 0). Returns each slot's selection probability (0 where it is
+/// dropped) and zeroes the weights of dropped slots.
 #[inline(always)]
-fn select_body<L: Lane>(job: &mut SelectJob<'_>) {
-    match job.count {
-        0 => {}
-        1 => select_slots::<L, 1>(job),
-        2 => select_slots::<L, 2>(job),
-        3 => select_slots::<L, 3>(job),
-        4 => select_slots::<L, 4>(job),
-        5 => select_slots::<L, 5>(job),
-        6 => select_slots::<L, 6>(job),
-        7 => select_slots::<L, 7>(job),
-        _ => select_slots::<L, MAX_SLOTS>(job),
-    }
-}
-
-#[inline(always)]
-fn select_slots<L: Lane, const COUNT: usize>(job: &mut SelectJob<'_>) {
-    debug_assert_eq!(job.count, COUNT);
-    let len = job.len;
+pub fn select<L: Lane>(
+    count: usize,
+    prune: f32,
+    share: &[L; MAX_SLOTS],
+    weight: &mut [Rgb<L>; MAX_SLOTS],
+) -> [L; MAX_SLOTS] {
     let (zero, one) = (L::zero(), L::one());
-    let mut share = [zero; COUNT];
-    let mut keep = [zero; COUNT];
-    let mut weight = [Rgb::zero(); COUNT];
-    for i in (0..len).step_by(L::LANES) {
-        // `Material::emit`: an emitted slot (some weight channel > 0) is kept unless its
-        // share is below `prune`; the first strongest pruned slot is kept when every
-        // slot is pruned.
-        let mut kept = zero;
-        let mut strongest = L::splat(-1.0);
-        let mut strongest_share = L::splat(f32::NEG_INFINITY);
-        for k in 0..COUNT {
-            let w = rgb_at::<L>(job.weight, k, len, i);
-            weight[k] = w;
-            share[k] = if job.live[k] {
-                rgb_at::<L>(job.albedo, k, len, i).luminance()
-            } else {
-                zero
-            };
-            let emitted = w.r.gt(zero) | w.g.gt(zero) | w.b.gt(zero);
-            let is_kept = emitted & share[k].ge(L::splat(job.prune));
-            keep[k] = L::select(is_kept, one, zero);
-            kept += keep[k];
-            let stronger = emitted & !is_kept & share[k].gt(strongest_share);
-            strongest_share = L::select(stronger, share[k], strongest_share);
-            strongest = L::select(stronger, L::splat(k as f32), strongest);
+    let mut keep = [zero; MAX_SLOTS];
+    // `Material::emit`: an emitted slot is kept unless its share is below `prune`; the
+    // first strongest pruned slot is kept when every slot is pruned.
+    let mut kept = zero;
+    let mut strongest = L::splat(-1.0);
+    let mut strongest_share = L::splat(f32::NEG_INFINITY);
+    for k in 0..count {
+        let w = weight[k];
+        let emitted = w.r.gt(zero) | w.g.gt(zero) | w.b.gt(zero);
+        let is_kept = emitted & share[k].ge(L::splat(prune));
+        keep[k] = L::select(is_kept, one, zero);
+        kept += keep[k];
+        let stronger = emitted & !is_kept & share[k].gt(strongest_share);
+        strongest_share = L::select(stronger, share[k], strongest_share);
+        strongest = L::select(stronger, L::splat(k as f32), strongest);
+    }
+    let none = kept.eq(zero);
+    // `closure::selection` of the kept slots: 1 for a single one, else their shares,
+    // or their weights' luminances, or ones, whichever first sums above 0.
+    let (mut n, mut share_sum, mut weight_sum) = (zero, zero, zero);
+    for k in 0..count {
+        let fallback = none & strongest.eq(L::splat(k as f32));
+        keep[k] = L::select(fallback, one, keep[k]);
+        n += keep[k];
+        share_sum += keep[k] * share[k].max(zero);
+        weight_sum += keep[k] * weight[k].luminance().max(zero);
+    }
+    let (mut largest, mut total) = (zero, zero);
+    for k in 0..count {
+        let by = L::select(
+            share_sum.gt(zero),
+            share[k].max(zero),
+            L::select(weight_sum.gt(zero), weight[k].luminance().max(zero), one),
+        );
+        keep[k] *= L::select(n.eq(one), one, by);
+        largest = largest.max(keep[k]);
+        total += keep[k];
+    }
+    // `normalize_shares`: times the reciprocal of the sum in slot order, or where that
+    // is not finite divided by the largest, then by the sum. A lane without any
+    // emitted slot keeps zeros.
+    let inv = one / total;
+    let direct = total.is_finite() & inv.is_finite();
+    if direct.all() {
+        for p in &mut keep[..count] {
+            *p *= inv;
         }
-        let none = kept.eq(zero);
-        // `closure::selection` of the kept slots: 1 for a single one, else their
-        // shares, or their weights' luminances, or ones, whichever first sums above 0.
-        let (mut n, mut share_sum, mut weight_sum) = (zero, zero, zero);
-        for k in 0..COUNT {
-            let fallback = none & strongest.eq(L::splat(k as f32));
-            keep[k] = L::select(fallback, one, keep[k]);
-            n += keep[k];
-            share_sum += keep[k] * share[k].max(zero);
-            weight_sum += keep[k] * weight[k].luminance().max(zero);
+    } else {
+        let largest = L::select(largest.gt(zero), largest, one);
+        let mut scaled_total = zero;
+        let mut scaled = keep;
+        for p in &mut scaled[..count] {
+            *p = *p / largest;
+            scaled_total += *p;
         }
-        let (mut largest, mut total) = (zero, zero);
-        for k in 0..COUNT {
-            let by = L::select(
-                share_sum.gt(zero),
-                share[k].max(zero),
-                L::select(weight_sum.gt(zero), weight[k].luminance().max(zero), one),
-            );
-            keep[k] *= L::select(n.eq(one), one, by);
-            largest = largest.max(keep[k]);
-            total += keep[k];
-        }
-        // `normalize_shares`: times the reciprocal of the sum in slot order, or where
-        // that is not finite divided by the largest, then by the sum. A lane without
-        // any emitted slot keeps zeros.
-        let inv = one / total;
-        let direct = total.is_finite() & inv.is_finite();
-        if direct.all() {
-            for p in &mut keep {
-                *p *= inv;
-            }
-        } else {
-            let largest = L::select(largest.gt(zero), largest, one);
-            let mut scaled_total = zero;
-            let mut scaled = keep;
-            for p in &mut scaled {
-                *p = *p / largest;
-                scaled_total += *p;
-            }
-            let scaled_total = L::select(scaled_total.gt(zero), scaled_total, one);
-            for (p, s) in keep.iter_mut().zip(scaled) {
-                *p = L::select(direct, *p * inv, s / scaled_total);
-            }
-        }
-        for k in 0..COUNT {
-            let p = keep[k];
-            let on = p.gt(zero);
-            job.kept[k] |= on.any();
-            p.store(&mut job.probability[k * len + i..]);
-            let w = Rgb::select(on, weight[k], Rgb::zero());
-            for (c, v) in w.to_array().into_iter().enumerate() {
-                v.store(&mut job.weight[(3 * k + c) * len + i..]);
-            }
+        let scaled_total = L::select(scaled_total.gt(zero), scaled_total, one);
+        for (p, s) in keep[..count].iter_mut().zip(scaled) {
+            *p = L::select(direct, *p * inv, s / scaled_total);
         }
     }
+    for (p, w) in keep[..count].iter().zip(weight.iter_mut()) {
+        *w = Rgb::select(p.gt(zero), *w, Rgb::zero());
+    }
+    keep
 }
 
 /// The slot each lane's `u` chooses by its probabilities, and `u` rescaled within
@@ -184,7 +139,7 @@ fn select_slots<L: Lane, const COUNT: usize>(job: &mut SelectJob<'_>) {
 pub struct ChooseJob<'a> {
     pub len: usize,
     pub count: usize,
-    /// Rows as [`SelectJob::probability`].
+    /// Rows as [`super::expand::ExpandJob::probability`].
     pub probability: &'a [f32],
     /// In: the lanes' `u_lobe`; out: `u` rescaled for the chosen slot.
     pub u: &'a mut [f32],
@@ -286,10 +241,6 @@ kernel!(
 kernel!(
     /// `wo` rows into per-lane frames (`to_frames_body`).
     to_frames<>(frame: &[f32], wo: [&[f32]; 3], local: &mut [&mut [f32]; 3]) => to_frames_body
-);
-kernel!(
-    /// Pruning and selection probabilities (`select_body`).
-    select<>(job: &mut SelectJob<'_>) => select_body
 );
 kernel!(
     /// Each lane's slot choice (`choose_body`).

@@ -45,7 +45,7 @@ pub struct Material {
     /// own parameters expand to (at normal incidence) and its decoded block: a point
     /// whose slot block equals it (its overrides leave the slot alone) copies the
     /// decoded block instead of decoding again (the clearcoat's takes logarithms).
-    decoded_defaults: Vec<Option<DecodedDefault>>,
+    decoded_defaults: Vec<Option<DecodedBlock>>,
     /// The shape id of a closure of this material alone, by the set of emitted slots
     /// (bit `k` for slot `k`); empty when a slot's type has enumerated parameters,
     /// whose choices are part of the shape.
@@ -156,6 +156,16 @@ impl Material {
     /// The compiled block followed by zeros: a point's copy to apply overrides to.
     pub fn padded_params(&self) -> [f32; MAX_MATERIAL_PARAMS] {
         self.params
+    }
+
+    /// [`Material::decoded_defaults`] of each slot.
+    pub(crate) fn decoded_defaults(&self) -> &[Option<DecodedBlock>] {
+        &self.decoded_defaults
+    }
+
+    /// Each slot's raw block length.
+    pub(crate) fn block_lens(&self) -> &[usize; MAX_SLOTS] {
+        &self.block_lens
     }
 
     /// The pruning threshold.
@@ -411,15 +421,7 @@ impl SlotVisitor for Emitter<'_> {
         let mut decoded = [0.0f32; MAX_DECODED_LEN];
         let decoded = &mut decoded[..M::DECODED_LEN];
         match &self.material.decoded_defaults[k] {
-            // Bit for bit (-0 and 0 may decode apart).
-            Some(d)
-                if raw
-                    .iter()
-                    .zip(&d.raw)
-                    .all(|(a, b)| a.to_bits() == b.to_bits()) =>
-            {
-                decoded.copy_from_slice(&d.decoded[..decoded.len()])
-            }
+            Some(d) if d.decodes(raw) => decoded.copy_from_slice(&d.decoded[..decoded.len()]),
             _ => M::decode(raw, decoded),
         }
         let mode = self.closure.transport();
@@ -443,11 +445,22 @@ impl SlotVisitor for Emitter<'_> {
     }
 }
 
-/// A slot's raw block as the material's own parameters expand it, decoded.
-#[derive(Clone)]
-struct DecodedDefault {
-    raw: [f32; MAX_SLOT_PARAMS],
-    decoded: [f32; MAX_DECODED_LEN],
+/// A slot's raw block and the block it decodes to.
+#[derive(Clone, Copy)]
+pub struct DecodedBlock {
+    pub raw: [f32; MAX_SLOT_PARAMS],
+    pub decoded: [f32; MAX_DECODED_LEN],
+}
+
+impl DecodedBlock {
+    /// Whether `raw` is this block's raw block, bit for bit (-0 and 0 may decode
+    /// apart).
+    #[inline(always)]
+    pub fn decodes(&self, raw: &[f32]) -> bool {
+        raw.iter()
+            .zip(&self.raw)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    }
 }
 
 /// [`Material::decoded_defaults`]: the slots whose decode is not a copy, decoded once
@@ -457,7 +470,7 @@ fn decoded_defaults(
     params: &[f32],
     slots: &[(u32, LobeRef)],
     block_lens: &[usize; MAX_SLOTS],
-) -> Vec<Option<DecodedDefault>> {
+) -> Vec<Option<DecodedBlock>> {
     let ctx = ShadingContext::new(Vec3::new(0.0, 0.0, 1.0), Frame::IDENTITY);
     let e = kind.expand(params, &ctx.lanes());
     slots
@@ -467,7 +480,7 @@ fn decoded_defaults(
             if lobe.decode_copies() {
                 return None;
             }
-            let mut d = DecodedDefault {
+            let mut d = DecodedBlock {
                 raw: e.params[k],
                 decoded: [0.0; MAX_DECODED_LEN],
             };
