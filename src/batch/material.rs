@@ -25,13 +25,16 @@ use crate::kernels::expand::ExpandJob;
 use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, OwnRows};
 use crate::kernels::material_rows::{self, ChooseJob};
 use crate::kernels::{
-    AlbedoJob, Directions, EvalJob, FinishJob, FinishLobe, LobeLanes, SampleJob, finish_mixture,
+    AlbedoJob, Directions, EvalJob, FinishJob, FinishLobe, LANE_MULTIPLE, LobeLanes, SampleJob,
+    finish_mixture, sort_rows, unsort_rows,
 };
 use crate::lobes::Transport;
 use crate::materials::compiled::MAX_MATERIAL_PARAMS;
 use crate::materials::{MAX_SLOTS, Material};
+use crate::math::lane::MAX_LANES;
 use crate::math::{Frame, Vec3};
 use crate::params::{self, ParamKind};
+use crate::registry::LobeRef;
 use crate::simd::Kernels;
 use std::ops::Range;
 
@@ -119,6 +122,17 @@ pub(super) struct SlotRows {
     albedo: Vec<f32>,
     /// Whether any lane keeps the slot.
     live: [bool; MAX_SLOTS],
+    sorted: SortedRows,
+}
+
+/// A material sample's rows in the order of the slots its lanes chose
+/// ([`sample_sorted`]), each row `stride` values: the frame, `wo` and `u`; one slot's
+/// decoded block and weight at a time; the outputs.
+#[derive(Default)]
+pub(super) struct SortedRows {
+    shared: Vec<f32>,
+    slot: Vec<f32>,
+    out: Vec<f32>,
 }
 
 /// Most decoded values a slot's lobe block holds in the rows.
@@ -239,7 +253,7 @@ fn stage_frames(
     // Then the lanes with a tangent (all-zero ones leave the choice to the library).
     if let Some(tangents) = &input.tangent {
         let (t, b) = frame_rows.split_at_mut(3 * len);
-        let ([tx, ty, tz], [bx, by, bz]) = (split3(t), split3(&mut b[..3 * len]));
+        let ([tx, ty, tz], [bx, by, bz]) = (split_rows(t, len), split_rows(b, len));
         let [sx, sy, sz] = view3(&rows.normal, len);
         for (j, &lane) in lanes.iter().enumerate() {
             let lane = lane as usize;
@@ -268,14 +282,6 @@ fn stage_frames(
         &mut rows3(&mut rows.local_wo, len),
     );
     any
-}
-
-/// Three rows of `len` values from `3 len`.
-fn split3(v: &mut [f32]) -> [&mut [f32]; 3] {
-    let len = v.len() / 3;
-    let (x, rest) = v.split_at_mut(len);
-    let (y, z) = rest.split_at_mut(len);
-    [x, y, z]
 }
 
 /// The overrides into the block rows: each overridden value's row gathered and
@@ -764,6 +770,130 @@ pub fn sample(
     })
 }
 
+/// Rows a material sample sorts: the frame, `wo` and `u` (shared by every slot's run),
+/// the sampling slot's decoded block and weight, and the sample's outputs.
+const SORTED_SHARED: usize = 15;
+const SORTED_SLOT: usize = MAX_PARAMS + 3;
+const SORTED_OUT: usize = 10;
+
+/// Each slot's sample over the lanes that chose it: the rows sorted into runs by
+/// chosen slot (`kernels::sort_rows`, as a closure batch's mixture sample), each
+/// slot's sampler over its run, and the outputs (`wi`, value, pdf, eta, roughness,
+/// events) back in lane order (`kernels::unsort_rows`); padding lanes repeat the last
+/// lane's. The same per-lane operations as sampling every lane and keeping the chosen
+/// ones, so the same bits, at a cost that follows the lanes each slot has.
+fn sample_sorted(
+    kernels: Kernels,
+    slots: &[(u32, LobeRef)],
+    rows: &mut SlotRows,
+    chosen: &[f32],
+    picks: &[usize; MAX_SLOTS],
+    (wo, u): ([&[f32]; 3], [&[f32]; 3]),
+    mut outputs: [&mut [f32]; SORTED_OUT],
+) -> Result<(), Error> {
+    let (count, n) = (slots.len(), chosen.len());
+    let len = outputs[0].len();
+    let mut starts = [0usize; MAX_SLOTS + 1];
+    for k in 0..count {
+        starts[k + 1] = starts[k] + picks[k].next_multiple_of(LANE_MULTIPLE);
+    }
+    // Whole registers are stored past each run's end.
+    let stride = starts[count] + MAX_LANES;
+    // Out of the rows while the slots' rows are read, put back at the end.
+    let mut taken = std::mem::take(&mut rows.sorted);
+    let sorted = &mut taken;
+    super::stage::reserve(&mut sorted.shared, SORTED_SHARED * stride)?;
+    super::stage::reserve(&mut sorted.slot, SORTED_SLOT * stride)?;
+    super::stage::reserve(&mut sorted.out, SORTED_OUT * stride)?;
+    let mut src = [&[][..]; SORTED_SHARED];
+    let frame = rows.frame[..9 * len].chunks_exact(len);
+    for (s, row) in src.iter_mut().zip(frame.chain(wo).chain(u)) {
+        *s = row;
+    }
+    let shared = grow(&mut sorted.shared, SORTED_SHARED * stride);
+    let mut dst = split_rows::<SORTED_SHARED>(shared, stride);
+    sort_rows(kernels, chosen, &starts[..=count], &src, &mut dst);
+    grow(&mut sorted.slot, SORTED_SLOT * stride);
+    grow(&mut sorted.out, SORTED_OUT * stride);
+    let shared = &sorted.shared[..SORTED_SHARED * stride];
+    for (k, (_, lobe)) in slots.iter().enumerate() {
+        if picks[k] == 0 {
+            continue;
+        }
+        let run = starts[k]..starts[k + 1];
+        // The slot's block and weight into its run alone (every other run empty).
+        let mut only = [run.end; MAX_SLOTS + 1];
+        only[..=k].fill(run.start);
+        let param_count = lobe.lane_decoded_len();
+        let own = rows.slot(k, param_count, len);
+        let mut src = [&[][..]; SORTED_SLOT];
+        let own_rows = own
+            .params
+            .chunks_exact(len)
+            .chain(own.weight.chunks_exact(len));
+        for (s, row) in src.iter_mut().zip(own_rows) {
+            *s = row;
+        }
+        let m = param_count + 3;
+        let mut dst = split_rows::<SORTED_SLOT>(&mut sorted.slot, stride);
+        sort_rows(kernels, chosen, &only[..=count], &src[..m], &mut dst[..m]);
+        fn at<'a>(rows: &'a [f32], row: usize, stride: usize, run: &Range<usize>) -> &'a [f32] {
+            &rows[row * stride + run.start..][..run.len()]
+        }
+        let slot_rows = &sorted.slot[..];
+        let [x, y, z, r, g, b, pdf, eta, roughness, events] =
+            split_rows::<SORTED_OUT>(&mut sorted.out, stride).map(|row| &mut row[run.clone()]);
+        let mut job = SampleJob {
+            len: run.len(),
+            mode: Transport::Radiance,
+            directions: Directions::Unit,
+            wo: [9, 10, 11].map(|row| at(shared, row, stride, &run)),
+            u: [12, 13, 14].map(|row| at(shared, row, stride, &run)),
+            lobe: LobeLanes::PerLane {
+                params: &slot_rows[run.start..],
+                param_count,
+                frame: &shared[run.start..],
+                weight: &slot_rows[param_count * stride + run.start..],
+                // Read only for a closure's only lobe: any row.
+                probability: at(slot_rows, param_count, stride, &run),
+                stride,
+            },
+            wi: [x, y, z],
+            value: [r, g, b],
+            pdf,
+            eta,
+            roughness,
+            events: Some(events),
+            closure: None,
+            only: None,
+            out_of_range: false,
+        };
+        lobe.sample_lanes(kernels, &mut job);
+    }
+    let mut src = [&[][..]; SORTED_OUT];
+    for (s, row) in src.iter_mut().zip(sorted.out.chunks_exact(stride)) {
+        *s = row;
+    }
+    let mut dst = outputs.each_mut().map(|row| &mut row[..n]);
+    unsort_rows(kernels, chosen, &starts[..=count], &src, &mut dst);
+    for row in &mut outputs {
+        let last = row[n - 1];
+        row[n..].fill(last);
+    }
+    rows.sorted = taken;
+    Ok(())
+}
+
+/// `N` rows of `stride` values from the front of `v`.
+fn split_rows<const N: usize>(v: &mut [f32], stride: usize) -> [&mut [f32]; N] {
+    let mut rest = v;
+    std::array::from_fn(|_| {
+        let (row, tail) = std::mem::take(&mut rest).split_at_mut(stride);
+        rest = tail;
+        row
+    })
+}
+
 #[allow(clippy::too_many_arguments)]
 fn sample_chunk(
     kernels: Kernels,
@@ -812,37 +942,32 @@ fn sample_chunk(
         ..
     } = &mut *s;
     let chosen = &chosen[..len];
-    // How many lanes chose each slot.
+    // How many lanes chose each slot (a count per slot vectorizes; an increment per
+    // lane is a chain through memory).
     let mut picks = [0usize; MAX_SLOTS];
-    for &k in &chosen[..n] {
-        picks[k as usize] += 1;
+    for (k, p) in picks[..slots.len()].iter_mut().enumerate() {
+        let slot = k as f32;
+        *p = chosen[..n]
+            .iter()
+            .fold(0, |c, &x| c + usize::from(x == slot));
     }
-    // Each slot chosen by any lane samples every lane, keeping those that chose it.
+    // Each chosen slot samples its own lanes, sorted into runs by slot.
     let [sv_r, sv_g, sv_b] = sample_value;
-    let (sv_r, sv_g, sv_b) = (grow(sv_r, len), grow(sv_g, len), grow(sv_b, len));
-    for (k, (_, lobe)) in slots.iter().enumerate() {
-        if picks[k] == 0 {
-            continue;
-        }
-        let mut job = SampleJob {
-            len,
-            mode: Transport::Radiance,
-            directions: Directions::Unit,
-            wo: view3(wo, len),
-            u: view3(u_rows, len),
-            lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-            wi: rows3(wi, len),
-            value: [&mut sv_r[..], &mut sv_g[..], &mut sv_b[..]],
-            pdf: grow(sample_pdf, len),
-            eta: grow(eta, len),
-            roughness: grow(roughness, len),
-            events: Some(grow(events, len)),
-            closure: None,
-            only: Some((chosen, k as f32)),
-            out_of_range: false,
-        };
-        lobe.sample_lanes(kernels, &mut job);
-    }
+    let [wi_x, wi_y, wi_z] = rows3(wi, len);
+    let outputs = [
+        wi_x,
+        wi_y,
+        wi_z,
+        grow(sv_r, len),
+        grow(sv_g, len),
+        grow(sv_b, len),
+        grow(sample_pdf, len),
+        grow(eta, len),
+        grow(roughness, len),
+        grow(events, len),
+    ];
+    let inputs = (view3(wo, len), view3(u_rows, len));
+    sample_sorted(kernels, slots, rows, &chosen[..n], &picks, inputs, outputs)?;
     material_rows::chosen_pdf(
         kernels,
         &rows.probability[..slots.len() * len],
