@@ -492,26 +492,27 @@ fn slots_emitted_on_some_lanes_match_their_closures() {
 
 /// Per-lane clearcoat gloss: the clearcoat's decode takes logarithms in f64, so the
 /// expansion decodes a block once and copies it while lanes repeat it. Whole registers
-/// of the material's own gloss, of a new value and of it again; then lanes that
-/// alternate, with -0 beside 0.
+/// of the material's own gloss, of 0, of -0 (the same value, other bits), of a new
+/// value and of it again; then lanes that alternate, with -0 beside 0.
 #[test]
 fn per_lane_clearcoat_gloss_matches_the_closures() {
     let description = r#"{"material": "disney", "clearcoat": 1, "clearcoat_gloss": 0.6}"#;
     let gloss = |i: usize| match i {
-        0..32 => 0.6,
-        32..64 => 0.25,
+        0..16 => 0.6,
+        16..32 => 0.0,
+        32..48 => -0.0,
+        48..80 => 0.25,
         _ => [0.0, -0.0, 0.6, 1.0, 0.25][i % 5],
     };
-    let outcomes = matches_closures(description, 0.0, 100, 0x6105, |_| {
-        vec![("clearcoat_gloss", vec![(0..100).map(gloss).collect()])]
+    let outcomes = matches_closures(description, 0.0, 120, 0x6105, |_| {
+        vec![("clearcoat_gloss", vec![(0..120).map(gloss).collect()])]
     });
     assert!(outcomes.iter().all(|&(k, _)| k == 3), "{outcomes:?}");
 }
 
-/// A material whose emitted slots are one of the fused shapes is evaluated by one
-/// kernel (`kernels::fused`) unless the reverse pdf is wanted, which takes the slots
-/// one by one: both give the same bits, value and pdf, and so does the pdf call, for
-/// each shape (every lobe, no clearcoat, no sheen, diffuse and specular, specular and
+/// A material batch's eval is finished in its staging pass (`kernels::expand`) unless
+/// the reverse pdf is wanted, which takes the slots one by one: both give the same
+/// bits, value and pdf, and so does the pdf call, for each set of emitted slots (every lobe, no clearcoat, no sheen, diffuse and specular, specular and
 /// clearcoat; slots emitted on some lanes only), over per-lane overrides, frames and
 /// inactive lanes, on every ISA.
 #[test]

@@ -6,11 +6,15 @@
 //! and expands it in one SIMD pass (`kernels::expand`: `MaterialModel::expand`, the
 //! same code as `Material::build_closure`, then each slot's block decoded and its
 //! albedo estimate, whose `luminance(weight * albedo)` prunes the slot per lane and
-//! sets the selection probabilities by the closure's rule, `closure::selection`) into
-//! per-slot SoA rows of decoded lobe blocks, weights and probabilities. Then each
-//! slot's lobe kernels run over the rows (`LobeLanes::PerLane`, or one fused kernel
-//! for all of them): eval, pdf or sample. A lane's result is that of the closure `glint_material_closure` builds for
-//! it, up to the batch kernels' rounding; slots every lane pruned are skipped.
+//! sets the selection probabilities by the closure's rule, `closure::selection`). An
+//! eval or pdf without the reverse pdf is finished in that pass: every kept slot
+//! evaluated from the registers, weighted and summed in slot order. The other calls
+//! get per-slot SoA rows of decoded lobe blocks, weights and probabilities, and run
+//! each slot's lobe kernels over them (`LobeLanes::PerLane`): the albedos, an eval
+//! with the reverse pdf slot by slot, or a sample (each slot over the lanes that chose
+//! it, sorted into runs, then the mixture at the sampled direction). A lane's result is
+//! that of the closure `glint_material_closure` builds for it, up to the batch
+//! kernels' rounding; slots every lane pruned are skipped.
 
 use super::stage::{
     LaneError, Scratch, grow, padded, rows3, stage_directions, view3, with_scratch,
@@ -21,7 +25,7 @@ use super::{
 };
 use crate::closure::SampleResult;
 use crate::error::{Error, Status};
-use crate::kernels::expand::ExpandJob;
+use crate::kernels::expand::{ExpandEval, ExpandJob};
 use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, OwnRows};
 use crate::kernels::material_rows::{self, ChooseJob};
 use crate::kernels::{
@@ -111,8 +115,6 @@ pub(super) struct SlotRows {
     input: Vec<f32>,
     /// Each lane's unit shading normal.
     normal: [Vec<f32>; 3],
-    /// `wo` in each lane's shading frame.
-    local_wo: [Vec<f32>; 3],
     /// Decoded blocks: slot `k`'s value `p` of lane `j` at `(k * MAX_PARAMS + p) * len + j`.
     params: Vec<f32>,
     weight: Vec<f32>,
@@ -141,7 +143,7 @@ const MAX_PARAMS: usize = crate::lobes::MAX_DECODED_LEN;
 impl SlotRows {
     fn reserve(&mut self, len: usize, block_len: usize) -> Result<(), Error> {
         super::stage::reserve(&mut self.input, block_len * len)?;
-        for row in self.local_wo.iter_mut().chain(&mut self.normal) {
+        for row in &mut self.normal {
             super::stage::reserve(row, len)?;
         }
         super::stage::reserve(&mut self.params, MAX_SLOTS * MAX_PARAMS * len)?;
@@ -179,7 +181,10 @@ impl SlotRows {
 /// Stage the chunk's lanes `lanes` (`len` padded): unit `wo` into `s.wo`, frames and
 /// per-lane material blocks; then the expansion in SIMD, each slot's blocks decoded,
 /// pruned by its albedo estimate and given its selection probability. Lanes with
-/// invalid inputs are flagged in `s.failed` and staged with valid stand-ins.
+/// invalid inputs are flagged in `s.failed` and staged with valid stand-ins. With
+/// `eval = (wi, want_value)`, the unit `wi` is staged into `s.wi` after the overrides,
+/// and the same pass evaluates the material into `s.value` and `s.pdf` instead of
+/// writing the slots' rows.
 fn stage_chunk(
     kernels: Kernels,
     input: &MaterialInput<'_>,
@@ -187,6 +192,7 @@ fn stage_chunk(
     len: usize,
     s: &mut Scratch,
     errors: &mut LaneError,
+    eval: Option<(Soa3<'_>, bool)>,
 ) -> Result<(), Error> {
     let material = input.material;
     let block_len = material.params().len();
@@ -210,15 +216,20 @@ fn stage_chunk(
         failed,
         errors,
     );
-    any |= stage_frames(kernels, input, lanes, len, &s.wo, rows, failed, errors);
+    any |= stage_frames(kernels, input, lanes, len, rows, failed, errors);
     let (failed_override, per_lane) = stage_blocks(input, lanes, len, rows, failed, errors);
-    s.any_failed = any | failed_override;
+    any |= failed_override;
+    if let Some((wi, _)) = eval {
+        any |= stage_directions(kernels, wi, "wi", lanes, len, &mut s.wi, failed, errors);
+    }
+    s.any_failed = any;
     let mut job = ExpandJob {
         len,
         params: &rows.input[..block_len * len],
         material: material.params(),
         per_lane,
-        wo: view3(&rows.local_wo, len),
+        frame: &rows.frame[..9 * len],
+        wo: view3(&s.wo, len),
         block_len: *material.block_lens(),
         prune: material.prune(),
         known: material.decoded_defaults(),
@@ -226,6 +237,11 @@ fn stage_chunk(
         weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
         probability: grow(&mut rows.probability, MAX_SLOTS * len),
         kept: [false; MAX_SLOTS],
+        eval: eval.map(|(_, want_value)| ExpandEval {
+            wi: view3(&s.wi, len),
+            value: want_value.then(|| rows3(&mut s.value, len)),
+            pdf: grow(&mut s.pdf, len),
+        }),
     };
     material.kind().expand_lanes(kernels, &mut job);
     rows.live = job.kept;
@@ -233,15 +249,12 @@ fn stage_chunk(
 }
 
 /// Each lane's shading frame (from the staged normal and the caller's tangent, as
-/// `Frame::new`) into the frame rows, and the staged `wo` in it into `local_wo`.
-/// Returns whether a tangent failed.
-#[allow(clippy::too_many_arguments)]
+/// `Frame::new`) into the frame rows. Returns whether a tangent failed.
 fn stage_frames(
     kernels: Kernels,
     input: &MaterialInput<'_>,
     lanes: &[u32],
     len: usize,
-    wo: &[Vec<f32>; 3],
     rows: &mut SlotRows,
     failed: &mut [u8],
     errors: &mut LaneError,
@@ -275,12 +288,6 @@ fn stage_frames(
             }
         }
     }
-    material_rows::to_frames(
-        kernels,
-        &rows.frame[..9 * len],
-        view3(wo, len),
-        &mut rows3(&mut rows.local_wo, len),
-    );
     any
 }
 
@@ -431,14 +438,13 @@ fn for_chunks(
     result
 }
 
-/// Eval (with `want_value`) or pdf of every active lane.
+/// Eval (with `want_value`), pdf and reverse pdf of every active lane, slot by slot.
 fn eval_chunk(
     kernels: Kernels,
     material: &Material,
     len: usize,
     s: &mut Scratch,
     want_value: bool,
-    want_reverse: bool,
 ) {
     let Scratch {
         material: rows,
@@ -451,13 +457,6 @@ fn eval_chunk(
     } = s;
     let ([vr, vg, vb], pdf, pdf_reverse) =
         (rows3(value, len), grow(pdf, len), grow(pdf_reverse, len));
-    if !want_reverse {
-        let value = want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]);
-        let directions = (&*wo, &*wi, Directions::Unit);
-        if eval_fused(kernels, material, rows, len, directions, None, value, pdf) {
-            return;
-        }
-    }
     // The first live slot stores, the others add; without one, zeros.
     let mut first = true;
     for (k, (_, lobe)) in material.slots().iter().enumerate() {
@@ -478,16 +477,7 @@ fn eval_chunk(
             out_of_range: false,
         };
         lobe.eval_lanes(kernels, &mut job);
-        if want_reverse {
-            let mut job = EvalJob {
-                wo: view3(wi, len),
-                wi: view3(wo, len),
-                value: None,
-                pdf: &mut pdf_reverse[..len],
-                ..job
-            };
-            lobe.eval_lanes(kernels, &mut job);
-        }
+        super::eval_reverse(kernels, &**lobe, job, pdf_reverse);
         first = false;
     }
     if first {
@@ -497,18 +487,18 @@ fn eval_chunk(
     }
 }
 
-/// The live slots' evals in one kernel when their lobes, in order, are one of the
-/// fused shapes (`kernels::fused`: the sums `eval_chunk` adds up slot by slot, the same
-/// bits), or with `own = (chosen, value, p pdf)` a sample's mixture sums as
-/// `sample_chunk` adds them; false, and nothing written, when they are not.
+/// A sample's mixture sums in one kernel when the live slots' lobes, in order, are one
+/// of the fused shapes (`kernels::fused::rows`, with `own = (chosen, value, p pdf)`:
+/// the sums `sample_chunk` otherwise adds up slot by slot, the same bits); false, and
+/// nothing written, when they are not.
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
-fn eval_fused(
+fn mixture_fused(
     kernels: Kernels,
     material: &Material,
     rows: &SlotRows,
     len: usize,
-    (wo, wi, directions): (&[Vec<f32>; 3], &[Vec<f32>; 3], Directions),
-    own: Option<(&[f32], [&[f32]; 3], &[f32])>,
+    (wo, wi): (&[Vec<f32>; 3], &[Vec<f32>; 3]),
+    (chosen, own_value, own_pdf): (&[f32], [&[f32]; 3], &[f32]),
     value: Option<[&mut [f32]; 3]>,
     pdf: &mut [f32],
 ) -> bool {
@@ -543,14 +533,14 @@ fn eval_fused(
             frame: &rows.frame[..9 * len],
             wo: view3(wo, len),
             wi: view3(wi, len),
-            directions,
+            directions: Directions::Sampled,
             slots,
-            own: own.map(|(chosen, value, pdf)| OwnRows {
+            own: OwnRows {
                 chosen: &chosen[..len],
                 slots: indices,
-                value,
-                pdf: &pdf[..len],
-            }),
+                value: own_value,
+                pdf: &own_pdf[..len],
+            },
             value,
             pdf: &mut pdf[..len],
         },
@@ -660,26 +650,24 @@ fn eval_block(
     with_scratch(|s| {
         for_chunks(input, start..end, s, |lanes, s| {
             let len = padded(lanes.len());
-            stage_chunk(kernels, input, lanes, len, s, &mut failure)?;
-            s.any_failed |= stage_directions(
-                kernels,
-                wi,
-                "wi",
-                lanes,
-                len,
-                &mut s.wi,
-                &mut s.failed,
-                &mut failure,
-            );
-            let want_reverse = out.pdf_reverse.is_some();
-            eval_chunk(
-                kernels,
-                input.material,
-                len,
-                s,
-                out.value.is_some(),
-                want_reverse,
-            );
+            let want_value = out.value.is_some();
+            if out.pdf_reverse.is_none() {
+                let eval = Some((wi, want_value));
+                stage_chunk(kernels, input, lanes, len, s, &mut failure, eval)?;
+            } else {
+                stage_chunk(kernels, input, lanes, len, s, &mut failure, None)?;
+                s.any_failed |= stage_directions(
+                    kernels,
+                    wi,
+                    "wi",
+                    lanes,
+                    len,
+                    &mut s.wi,
+                    &mut s.failed,
+                    &mut failure,
+                );
+                eval_chunk(kernels, input.material, len, s, want_value);
+            }
             if let Some(v) = out.value.as_mut() {
                 for (staged, out) in s.value.iter().zip([&mut *v.x, &mut *v.y, &mut *v.z]) {
                     scatter(lanes, start, &s.failed, staged, out);
@@ -706,7 +694,7 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
         with_scratch(|s| {
             for_chunks(input, start..end, s, |lanes, s| {
                 let len = padded(lanes.len());
-                stage_chunk(exec.kernels, input, lanes, len, s, &mut failure)?;
+                stage_chunk(exec.kernels, input, lanes, len, s, &mut failure, None)?;
                 // The kept slots' `weight * albedo` (a dropped slot's weight is 0 on its
                 // lane); pruning weighed them by estimates.
                 let live = s.material.live;
@@ -907,7 +895,7 @@ fn sample_chunk(
 ) -> Result<(), Error> {
     let len = padded(lanes.len());
     let n = lanes.len();
-    stage_chunk(kernels, input, lanes, len, s, failure)?;
+    stage_chunk(kernels, input, lanes, len, s, failure, None)?;
     let slots = input.material.slots();
     // The random numbers, padding lanes repeating the last lane's; then the lobe
     // choice, as `Closure::sample` makes it.
@@ -979,22 +967,13 @@ fn sample_chunk(
     // evaluated on the lanes that chose another, then its own samples added; in one
     // kernel when the slots are a fused shape.
     let own = (chosen, view3(sample_value, len), &sample_pdf[..len]);
-    let directions = (&*wo, &*wi, Directions::Sampled);
     let mut value = rows3(value, len);
     let pdf = grow(pdf, len);
     let fused = {
         let [vr, vg, vb] = &mut value;
         let value = Some([&mut vr[..], &mut vg[..], &mut vb[..]]);
-        eval_fused(
-            kernels,
-            input.material,
-            rows,
-            len,
-            directions,
-            Some(own),
-            value,
-            pdf,
-        )
+        let (material, directions) = (input.material, (&*wo, &*wi));
+        mixture_fused(kernels, material, rows, len, directions, own, value, pdf)
     };
     if !fused {
         for row in value.iter_mut() {

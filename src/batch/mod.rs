@@ -27,7 +27,7 @@ use crate::kernels::{
     FinishJob, FinishLobe, FinishOutput, choose_lobes, finish_mixture, normalize, sort_rows,
     to_local, unpack_events, unsort_rows,
 };
-use crate::lobes::Sample;
+use crate::lobes::{LobeType, Sample};
 use crate::math::lane::MAX_LANES;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::simd::Kernels;
@@ -683,14 +683,7 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
         };
         l.lobe.eval_lanes(kernels, &mut job);
         if want_reverse {
-            let mut job = EvalJob {
-                wo: view3(wi, len),
-                wi: view3(wo, len),
-                value: None,
-                pdf: &mut pdf_reverse[..len],
-                ..job
-            };
-            l.lobe.eval_lanes(kernels, &mut job);
+            eval_reverse(kernels, &*l.lobe, job, pdf_reverse);
         }
     }
 }
@@ -1582,4 +1575,21 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
         }
     }
     finish_block(s, base, |lane| out.write(lane, &SampleResult::FAILED))
+}
+
+/// `job`'s lobe with `wo` and `wi` exchanged: its reverse pdf into `pdf_reverse`.
+fn eval_reverse<'a>(
+    kernels: Kernels,
+    lobe: &dyn LobeType,
+    job: EvalJob<'a>,
+    pdf_reverse: &'a mut [f32],
+) {
+    let mut job = EvalJob {
+        wo: job.wi,
+        wi: job.wo,
+        value: None,
+        pdf: &mut pdf_reverse[..job.len],
+        ..job
+    };
+    lobe.eval_lanes(kernels, &mut job);
 }

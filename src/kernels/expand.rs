@@ -1,6 +1,7 @@
 //! A material's expansion over staged lanes, one register at a time and in one pass:
 //! `expand` ([`MaterialModel::expand`], written once over the lane type) from the
-//! per-lane parameter blocks (overrides applied) and `wo` in each lane's shading frame;
+//! per-lane parameter blocks (overrides applied) and `wo` taken into each lane's
+//! shading frame;
 //! each slot's block decoded and its albedo estimated; then pruning and selection
 //! ([`super::material_rows::select`]). The slots' models are known statically
 //! ([`MaterialModel::Slots`]), so every slot's decode, estimate and block sizes are
@@ -8,7 +9,7 @@
 //! Each step is the closure's (`materials::compiled::emit`), operation for operation,
 //! so the rows hold the bits a closure per lane would.
 
-use super::material_rows;
+use super::{load_row3, material_rows};
 use crate::error::Error;
 use crate::lobes::{MAX_DECODED_LEN, Model, Params, Transport};
 use crate::materials::compiled::{DecodedBlock, MAX_MATERIAL_PARAMS};
@@ -16,7 +17,7 @@ use crate::materials::{
     Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, SlotModels, SlotVisitor,
 };
 use crate::math::lane::MAX_LANES;
-use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::params::block_size;
 use crate::simd::kernel;
 
@@ -31,7 +32,9 @@ pub struct ExpandJob<'a> {
     pub material: &'a [f32],
     /// The values with rows in `params` (overridden on some lane).
     pub per_lane: [bool; MAX_MATERIAL_PARAMS],
-    /// Unit `wo` in each lane's shading frame.
+    /// Each lane's shading frame: nine rows (t, b, n, each x, y, z).
+    pub frame: &'a [f32],
+    /// Unit `wo` in world space.
     pub wo: [&'a [f32]; 3],
     /// Each slot's raw block length.
     pub block_len: [usize; MAX_SLOTS],
@@ -41,6 +44,7 @@ pub struct ExpandJob<'a> {
     /// block is one of them copy it instead of decoding.
     pub known: &'a [Option<DecodedBlock>],
     /// Slot `k`'s decoded block, value `p` of lane `j` at `(k MAX_DECODED_LEN + p) len + j`.
+    /// These rows, `weight` and `probability` are not written when `eval` is given.
     pub decoded: &'a mut [f32],
     /// Slot `k`'s weight, channel `c` of lane `j` at `(3 k + c) len + j`; zero where
     /// the slot is dropped.
@@ -49,9 +53,21 @@ pub struct ExpandJob<'a> {
     pub probability: &'a mut [f32],
     /// Out: slots with a nonzero probability on some lane.
     pub kept: [bool; MAX_SLOTS],
+    /// The material's eval at each lane's `wi`, in the same pass.
+    pub eval: Option<ExpandEval<'a>>,
 }
 
-/// One register's slots: decoded into the rows, estimated.
+/// An eval in the expansion's pass: what `kernels::fused::rows` computes from the rows
+/// (`sum_k weight_k f_k` and `sum_k p_k pdf_k` over the kept slots, in slot order, each
+/// term as the eval kernels compute it), from the registers instead.
+pub struct ExpandEval<'a> {
+    /// Unit `wi` in world space.
+    pub wi: [&'a [f32]; 3],
+    pub value: Option<[&'a mut [f32]; 3]>,
+    pub pdf: &'a mut [f32],
+}
+
+/// One register's slots: decoded (into the rows, when wanted), estimated.
 struct Slots<'j, L> {
     i: usize,
     len: usize,
@@ -59,7 +75,9 @@ struct Slots<'j, L> {
     expansion: &'j Expansion<L>,
     /// The last block each slot decoded (or the known one).
     cache: &'j mut [Option<DecodedBlock>; MAX_SLOTS],
-    decoded: &'j mut [f32],
+    rows: Option<&'j mut [f32]>,
+    /// Each slot's decoded block (its first `DECODED_LEN` values).
+    decoded: &'j mut [[L; MAX_DECODED_LEN]; MAX_SLOTS],
     share: [L; MAX_SLOTS],
 }
 
@@ -67,16 +85,18 @@ impl<L: Lane> SlotVisitor for Slots<'_, L> {
     #[inline(always)]
     fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
         let raw = &self.expansion.params[k][..block_size(M::PARAMS)];
-        let mut decoded = [L::zero(); MAX_DECODED_LEN];
-        let decoded = &mut decoded[..M::DECODED_LEN];
+        let decoded = &mut self.decoded[k][..M::DECODED_LEN];
         if M::DECODE_COPIES && raw.len() == decoded.len() {
             decoded.copy_from_slice(raw);
         } else {
             decode::<M, L>(raw, decoded, &mut self.cache[k]);
         }
-        let (len, i) = (self.len, self.i);
-        for (p, v) in decoded.iter().enumerate() {
-            v.store(&mut self.decoded[(k * MAX_DECODED_LEN + p) * len + i..]);
+        let decoded = &self.decoded[k][..M::DECODED_LEN];
+        if let Some(rows) = self.rows.as_deref_mut() {
+            let (len, i) = (self.len, self.i);
+            for (p, v) in decoded.iter().enumerate() {
+                v.store(&mut rows[(k * MAX_DECODED_LEN + p) * len + i..]);
+            }
         }
         let weight = self.expansion.weight[k];
         let zero = L::zero();
@@ -90,10 +110,48 @@ impl<L: Lane> SlotVisitor for Slots<'_, L> {
     }
 }
 
+/// One register's eval sums over its kept slots (`kernels::fused::rows`'s terms).
+struct EvalSlots<'j, L> {
+    decoded: &'j [[L; MAX_DECODED_LEN]; MAX_SLOTS],
+    weight: &'j [Rgb<L>; MAX_SLOTS],
+    probability: &'j [L; MAX_SLOTS],
+    wo: Vec3<L>,
+    wi: Vec3<L>,
+    sum: Option<(Rgb<L>, L)>,
+}
+
+impl<L: Lane> SlotVisitor for EvalSlots<'_, L> {
+    #[inline(always)]
+    fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
+        let probability = self.probability[k];
+        // A slot kept on no lane adds `0 f`: nothing.
+        if !probability.gt(L::zero()).any() {
+            return Ok(());
+        }
+        let p = M::prepare(Params::new(&self.decoded[k][..M::DECODED_LEN]));
+        let e = M::eval(&p, self.wo, self.wi, Transport::Radiance);
+        let (v, q) = (self.weight[k] * e.value, probability * e.pdf);
+        self.sum = Some(match self.sum {
+            None => (v, q),
+            Some((value, pdf)) => (value + v, pdf + q),
+        });
+        Ok(())
+    }
+}
+
 /// `M::decode` of each lane's `raw` block into `out`: lanes whose block is `cache`'s
 /// copy its decoded block; the others decode, one at a time, and become the cache.
 #[inline(always)]
 fn decode<M: Model, L: Lane>(raw: &[L], out: &mut [L], cache: &mut Option<DecodedBlock>) {
+    let n = raw.len();
+    if let Some(c) = cache
+        && holds(raw, &c.raw[..n])
+    {
+        for (o, &v) in out.iter_mut().zip(&c.decoded) {
+            *o = L::splat(v);
+        }
+        return;
+    }
     let mut lanes = [[0.0f32; MAX_LANES]; MAX_SLOT_PARAMS];
     for (row, v) in lanes.iter_mut().zip(raw) {
         v.store(row);
@@ -105,13 +163,6 @@ fn decode<M: Model, L: Lane>(raw: &[L], out: &mut [L], cache: &mut Option<Decode
         }
         b
     };
-    let n = raw.len();
-    if let Some(c) = cache.filter(|c| (0..L::LANES).all(|j| c.decodes(&block(j)[..n]))) {
-        for (o, &v) in out.iter_mut().zip(&c.decoded) {
-            *o = L::splat(v);
-        }
-        return;
-    }
     let mut decoded = [[0.0f32; MAX_LANES]; MAX_DECODED_LEN];
     for j in 0..L::LANES {
         let b = block(j);
@@ -136,6 +187,20 @@ fn decode<M: Model, L: Lane>(raw: &[L], out: &mut [L], cache: &mut Option<Decode
     }
 }
 
+/// Whether every lane of `raw` holds `block`, bit for bit: equal, and with the same
+/// sign (equal floats differ in their bits only as -0 and +0).
+#[inline(always)]
+fn holds<L: Lane>(raw: &[L], block: &[f32]) -> bool {
+    // Plain loops: a closure is a function without the kernel's target features
+    // (tests/simd_inlining.rs).
+    let mut all = true;
+    for (&v, &x) in raw.iter().zip(block) {
+        let sign = L::one().copysign(v).eq(L::splat(1f32.copysign(x)));
+        all &= (v.eq(L::splat(x)) & sign).all();
+    }
+    all
+}
+
 #[inline(always)]
 fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     let len = job.len;
@@ -150,20 +215,28 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     }
     let zero = Vec3::new(L::zero(), L::zero(), L::zero());
     let mut e = Expansion::<L>::default();
+    // Out of the loop: each register writes what it reads.
+    let mut decoded = [[L::zero(); MAX_DECODED_LEN]; MAX_SLOTS];
     for i in (0..len).step_by(L::LANES) {
         for (p, r) in raw[..param_count].iter_mut().enumerate() {
             if job.per_lane[p] {
                 *r = L::load(&job.params[p * len + i..]);
             }
         }
+        let frame = LaneFrame {
+            t: load_row3(job.frame, len, 0, i),
+            b: load_row3(job.frame, len, 1, i),
+            n: load_row3(job.frame, len, 2, i),
+        };
+        let wo = Vec3::new(
+            L::load(&job.wo[0][i..]),
+            L::load(&job.wo[1][i..]),
+            L::load(&job.wo[2][i..]),
+        );
         // Material batches take no positions, footprints or uvs: zero, as a context
         // that leaves them unset.
         let ctx = Context {
-            wo: Vec3::new(
-                L::load(&job.wo[0][i..]),
-                L::load(&job.wo[1][i..]),
-                L::load(&job.wo[2][i..]),
-            ),
+            wo: frame.to_local(wo),
             position: zero,
             reference_position: zero,
             footprint: L::zero(),
@@ -184,21 +257,47 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             wo: ctx.wo,
             expansion: &e,
             cache: &mut cache,
-            decoded: job.decoded,
+            rows: job.eval.is_none().then_some(&mut *job.decoded),
+            decoded: &mut decoded,
             share: [L::zero(); MAX_SLOTS],
         };
         M::Slots::visit(&mut slots).expect("a slot's staging does not fail");
         let share = slots.share;
         let mut weight = e.weight;
         let probability = material_rows::select(count, job.prune, &share, &mut weight);
-        for k in 0..count {
-            let p = probability[k];
-            job.kept[k] |= p.gt(L::zero()).any();
-            p.store(&mut job.probability[k * len + i..]);
-            for (c, v) in weight[k].to_array().into_iter().enumerate() {
-                v.store(&mut job.weight[(3 * k + c) * len + i..]);
+        for (kept, p) in job.kept[..count].iter_mut().zip(&probability) {
+            *kept |= p.gt(L::zero()).any();
+        }
+        let Some(eval) = job.eval.as_mut() else {
+            for k in 0..count {
+                probability[k].store(&mut job.probability[k * len + i..]);
+                for (c, v) in weight[k].to_array().into_iter().enumerate() {
+                    v.store(&mut job.weight[(3 * k + c) * len + i..]);
+                }
+            }
+            continue;
+        };
+        let wi = Vec3::new(
+            L::load(&eval.wi[0][i..]),
+            L::load(&eval.wi[1][i..]),
+            L::load(&eval.wi[2][i..]),
+        );
+        let mut sums = EvalSlots {
+            decoded: &decoded,
+            weight: &weight,
+            probability: &probability,
+            wo: ctx.wo,
+            wi: frame.to_local(wi),
+            sum: None,
+        };
+        M::Slots::visit(&mut sums).expect("an eval does not fail");
+        let (value, pdf) = sums.sum.unwrap_or((Rgb::zero(), L::zero()));
+        if let Some(rows) = eval.value.as_mut() {
+            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
+                v.store(&mut row[i..]);
             }
         }
+        pdf.store(&mut eval.pdf[i..]);
     }
 }
 

@@ -315,9 +315,10 @@ pub struct FusedRows<'a> {
     pub probability: &'a [f32],
 }
 
-/// A fused eval over a material batch's staged rows (`len` a multiple of
-/// [`super::LANE_MULTIPLE`]): what each slot's eval kernel over
-/// `LobeLanes::PerLane` computes and adds, in one pass.
+/// A material batch sample's mixture sums over its staged rows (`len` a multiple of
+/// [`super::LANE_MULTIPLE`]): what each slot's eval kernel over `LobeLanes::PerLane`
+/// computes and adds on the lanes that chose another slot, with each lane's own
+/// sample in its chosen slot's place, in one pass.
 pub struct FusedRowsJob<'a> {
     pub len: usize,
     pub mode: Transport,
@@ -330,9 +331,9 @@ pub struct FusedRowsJob<'a> {
     pub directions: Directions,
     /// The emitted slots in order (as many as the shape has).
     pub slots: [FusedRows<'a>; MAX_FUSED],
-    /// A mixture sample's own terms: each lane's chosen slot, the slot index of each
-    /// lobe of the shape, and the chosen slot's weighted value and `p pdf`.
-    pub own: Option<OwnRows<'a>>,
+    /// The samples' own terms: each lane's chosen slot, the slot index of each lobe
+    /// of the shape, and the chosen slot's weighted value and `p pdf`.
+    pub own: OwnRows<'a>,
     pub value: Option<[&'a mut [f32]; 3]>,
     pub pdf: &'a mut [f32],
 }
@@ -378,21 +379,17 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
         let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
         let wi = direction(job.wi, i, L::LANES, job.directions, &mut unused);
         let (wo, wi) = (frame.to_local(wo), frame.to_local(wi));
-        let sums = match &job.own {
-            None => S::sum(&p, &terms, None, wo, wi, job.mode),
-            Some(own) => {
-                let own_value = load_rgb(own.value, i, L::LANES);
-                let chosen = (L::load(&own.chosen[i..]), &own.slots);
-                let own_pdf = L::load(&own.pdf[i..]);
-                S::sum_per_lane(&p, &terms, chosen, own_value, own_pdf, wo, wi, job.mode)
-            }
-        };
+        let own = &job.own;
+        let own_value = load_rgb(own.value, i, L::LANES);
+        let chosen = (L::load(&own.chosen[i..]), &own.slots);
+        let own_pdf = L::load(&own.pdf[i..]);
+        let sums = S::sum_per_lane(&p, &terms, chosen, own_value, own_pdf, wo, wi, job.mode);
         store_sums(sums, &mut job.value, job.pdf, i, L::LANES);
     }
 }
 
 kernel!(
-    /// A fused shape's eval over a material batch's rows (`rows_body`).
+    /// A fused shape's mixture sums over a material batch sample's rows (`rows_body`).
     rows<S: Shape>(job: &mut FusedRowsJob<'_>) => rows_body
 );
 kernel!(

@@ -1,15 +1,14 @@
 //! The rows of a material batch (`crate::batch::material`) around its lobe kernels,
-//! one register of lanes at a time: shading frames from normals and `wo` in them,
+//! one register of lanes at a time: shading frames from normals, one register's
 //! pruning and selection probabilities from each slot's `weight * albedo`, and the
 //! slot each sample chooses. Each repeats, per lane, the scalar closure's operations
 //! in the same order (`Frame::new`, `Material::emit`, `closure::selection`,
 //! `mixture::choose`), so the rows hold the bits a closure per lane would.
 
-use super::load_row3;
 use super::mixture::clamp_random;
 use crate::materials::MAX_SLOTS;
 use crate::math::frame::duff_axes;
-use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
+use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::simd::kernel;
 
 /// `frame` (nine rows of `len`: t, b, n, each x, y, z) from unit normals (`Frame::new`
@@ -28,28 +27,6 @@ fn frames_body<L: Lane>(normal: [&[f32]; 3], frame: &mut [f32]) {
         let axes = [t.x, t.y, t.z, b.x, b.y, b.z, n.x, n.y, n.z];
         for (row, v) in axes.into_iter().enumerate() {
             v.store(&mut frame[row * len + i..]);
-        }
-    }
-}
-
-/// Unit `wo` rows into each lane's `frame` (rows as [`frames_body`] writes them).
-#[inline(always)]
-fn to_frames_body<L: Lane>(frame: &[f32], wo: [&[f32]; 3], local: &mut [&mut [f32]; 3]) {
-    let len = wo[0].len();
-    for i in (0..len).step_by(L::LANES) {
-        let f = LaneFrame {
-            t: load_row3::<L>(frame, len, 0, i),
-            b: load_row3(frame, len, 1, i),
-            n: load_row3(frame, len, 2, i),
-        };
-        let w = Vec3::new(
-            L::load(&wo[0][i..]),
-            L::load(&wo[1][i..]),
-            L::load(&wo[2][i..]),
-        );
-        let l = f.to_local(w);
-        for (v, row) in [l.x, l.y, l.z].into_iter().zip(local.iter_mut()) {
-            v.store(&mut row[i..]);
         }
     }
 }
@@ -237,10 +214,6 @@ fn add_own_body<L: Lane>(
 kernel!(
     /// Frames from unit normal rows (`frames_body`).
     frames<>(normal: [&[f32]; 3], frame: &mut [f32]) => frames_body
-);
-kernel!(
-    /// `wo` rows into per-lane frames (`to_frames_body`).
-    to_frames<>(frame: &[f32], wo: [&[f32]; 3], local: &mut [&mut [f32]; 3]) => to_frames_body
 );
 kernel!(
     /// Each lane's slot choice (`choose_body`).
