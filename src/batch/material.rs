@@ -181,10 +181,8 @@ impl SlotRows {
 /// Stage the chunk's lanes `lanes` (`len` padded): unit `wo` into `s.wo`, frames and
 /// per-lane material blocks; then the expansion in SIMD, each slot's blocks decoded,
 /// pruned by its albedo estimate and given its selection probability. Lanes with
-/// invalid inputs are flagged in `s.failed` and staged with valid stand-ins. With
-/// `eval = (wi, want_value)`, the unit `wi` is staged into `s.wi` after the overrides,
-/// and the same pass evaluates the material into `s.value` and `s.pdf` instead of
-/// writing the slots' rows.
+/// invalid inputs are flagged in `s.failed` and staged with valid stand-ins. With an
+/// `eval`, the unit `wi` is staged into `s.wi` after the overrides.
 fn stage_chunk(
     kernels: Kernels,
     input: &MaterialInput<'_>,
@@ -192,7 +190,7 @@ fn stage_chunk(
     len: usize,
     s: &mut Scratch,
     errors: &mut LaneError,
-    eval: Option<(Soa3<'_>, bool)>,
+    eval: Option<StageEval<'_>>,
 ) -> Result<(), Error> {
     let material = input.material;
     let block_len = material.params().len();
@@ -219,8 +217,8 @@ fn stage_chunk(
     any |= stage_frames(kernels, input, lanes, len, rows, failed, errors);
     let (failed_override, per_lane) = stage_blocks(input, lanes, len, rows, failed, errors);
     any |= failed_override;
-    if let Some((wi, _)) = eval {
-        any |= stage_directions(kernels, wi, "wi", lanes, len, &mut s.wi, failed, errors);
+    if let Some(e) = &eval {
+        any |= stage_directions(kernels, e.wi, "wi", lanes, len, &mut s.wi, failed, errors);
     }
     s.any_failed = any;
     let mut job = ExpandJob {
@@ -237,15 +235,25 @@ fn stage_chunk(
         weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
         probability: grow(&mut rows.probability, MAX_SLOTS * len),
         kept: [false; MAX_SLOTS],
-        eval: eval.map(|(_, want_value)| ExpandEval {
+        eval: eval.filter(|e| e.in_pass).map(|e| ExpandEval {
             wi: view3(&s.wi, len),
-            value: want_value.then(|| rows3(&mut s.value, len)),
+            value: e.want_value.then(|| rows3(&mut s.value, len)),
             pdf: grow(&mut s.pdf, len),
         }),
     };
     material.kind().expand_lanes(kernels, &mut job);
     rows.live = job.kept;
     Ok(())
+}
+
+/// What an eval asks of [`stage_chunk`]: `wi` staged, and with `in_pass` the value
+/// (when `want_value`) and pdf finished in the staging pass into `s.value` and `s.pdf`
+/// (`kernels::expand::ExpandEval`) instead of the slots' rows written.
+#[derive(Clone, Copy)]
+struct StageEval<'a> {
+    wi: Soa3<'a>,
+    want_value: bool,
+    in_pass: bool,
 }
 
 /// Each lane's shading frame (from the staged normal and the caller's tangent, as
@@ -650,23 +658,15 @@ fn eval_block(
     with_scratch(|s| {
         for_chunks(input, start..end, s, |lanes, s| {
             let len = padded(lanes.len());
-            let want_value = out.value.is_some();
-            if out.pdf_reverse.is_none() {
-                let eval = Some((wi, want_value));
-                stage_chunk(kernels, input, lanes, len, s, &mut failure, eval)?;
-            } else {
-                stage_chunk(kernels, input, lanes, len, s, &mut failure, None)?;
-                s.any_failed |= stage_directions(
-                    kernels,
-                    wi,
-                    "wi",
-                    lanes,
-                    len,
-                    &mut s.wi,
-                    &mut s.failed,
-                    &mut failure,
-                );
-                eval_chunk(kernels, input.material, len, s, want_value);
+            // The reverse pdf is taken slot by slot, over the slots' rows.
+            let eval = StageEval {
+                wi,
+                want_value: out.value.is_some(),
+                in_pass: out.pdf_reverse.is_none(),
+            };
+            stage_chunk(kernels, input, lanes, len, s, &mut failure, Some(eval))?;
+            if !eval.in_pass {
+                eval_chunk(kernels, input.material, len, s, eval.want_value);
             }
             if let Some(v) = out.value.as_mut() {
                 for (staged, out) in s.value.iter().zip([&mut *v.x, &mut *v.y, &mut *v.z]) {
@@ -787,12 +787,13 @@ fn sample_sorted(
     }
     // Whole registers are stored past each run's end.
     let stride = starts[count] + MAX_LANES;
-    // Out of the rows while the slots' rows are read, put back at the end.
-    let mut taken = std::mem::take(&mut rows.sorted);
-    let sorted = &mut taken;
+    let sorted = &mut rows.sorted;
     super::stage::reserve(&mut sorted.shared, SORTED_SHARED * stride)?;
     super::stage::reserve(&mut sorted.slot, SORTED_SLOT * stride)?;
     super::stage::reserve(&mut sorted.out, SORTED_OUT * stride)?;
+    // Out of the rows while the slots' rows are read, put back at the end.
+    let mut taken = std::mem::take(sorted);
+    let sorted = &mut taken;
     let mut src = [&[][..]; SORTED_SHARED];
     let frame = rows.frame[..9 * len].chunks_exact(len);
     for (s, row) in src.iter_mut().zip(frame.chain(wo).chain(u)) {
@@ -825,9 +826,6 @@ fn sample_sorted(
         let m = param_count + 3;
         let mut dst = split_rows::<SORTED_SLOT>(&mut sorted.slot, stride);
         sort_rows(kernels, chosen, &only[..=count], &src[..m], &mut dst[..m]);
-        fn at<'a>(rows: &'a [f32], row: usize, stride: usize, run: &Range<usize>) -> &'a [f32] {
-            &rows[row * stride + run.start..][..run.len()]
-        }
         let slot_rows = &sorted.slot[..];
         let [x, y, z, r, g, b, pdf, eta, roughness, events] =
             split_rows::<SORTED_OUT>(&mut sorted.out, stride).map(|row| &mut row[run.clone()]);
@@ -870,6 +868,11 @@ fn sample_sorted(
     }
     rows.sorted = taken;
     Ok(())
+}
+
+/// Row `row` of sorted rows of `stride` values, over `run`.
+fn at<'a>(rows: &'a [f32], row: usize, stride: usize, run: &Range<usize>) -> &'a [f32] {
+    &rows[row * stride + run.start..][..run.len()]
 }
 
 /// `N` rows of `stride` values from the front of `v`.

@@ -9,7 +9,7 @@
 //! Each step is the closure's (`materials::compiled::emit`), operation for operation,
 //! so the rows hold the bits a closure per lane would.
 
-use super::{load_row3, material_rows};
+use super::{load_frame, load3, material_rows};
 use crate::error::Error;
 use crate::lobes::{MAX_DECODED_LEN, Model, Params, Transport};
 use crate::materials::compiled::{DecodedBlock, MAX_MATERIAL_PARAMS};
@@ -17,7 +17,7 @@ use crate::materials::{
     Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, SlotModels, SlotVisitor,
 };
 use crate::math::lane::MAX_LANES;
-use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
+use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::params::block_size;
 use crate::simd::kernel;
 
@@ -100,7 +100,7 @@ impl<L: Lane> SlotVisitor for Slots<'_, L> {
         }
         let weight = self.expansion.weight[k];
         let zero = L::zero();
-        let emitted = weight.r.gt(zero) | weight.g.gt(zero) | weight.b.gt(zero);
+        let emitted = weight.any_positive();
         if emitted.any() {
             let p = M::prepare(Params::new(decoded));
             let albedo = M::albedo_estimate(&p, self.wo, Transport::Radiance);
@@ -223,16 +223,8 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 *r = L::load(&job.params[p * len + i..]);
             }
         }
-        let frame = LaneFrame {
-            t: load_row3(job.frame, len, 0, i),
-            b: load_row3(job.frame, len, 1, i),
-            n: load_row3(job.frame, len, 2, i),
-        };
-        let wo = Vec3::new(
-            L::load(&job.wo[0][i..]),
-            L::load(&job.wo[1][i..]),
-            L::load(&job.wo[2][i..]),
-        );
+        let frame = load_frame::<L>(job.frame, len, i);
+        let wo = load3::<L>(job.wo, i, L::LANES);
         // Material batches take no positions, footprints or uvs: zero, as a context
         // that leaves them unset.
         let ctx = Context {
@@ -277,11 +269,7 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             }
             continue;
         };
-        let wi = Vec3::new(
-            L::load(&eval.wi[0][i..]),
-            L::load(&eval.wi[1][i..]),
-            L::load(&eval.wi[2][i..]),
-        );
+        let wi = load3::<L>(eval.wi, i, L::LANES);
         let mut sums = EvalSlots {
             decoded: &decoded,
             weight: &weight,

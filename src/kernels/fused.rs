@@ -8,7 +8,7 @@
 //! the half vector) and the sums are stored once. The arithmetic is the unfused
 //! path's, operation for operation, so the outputs are the same bits.
 
-use super::{Directions, MAX_LOBE_PARAMS, direction, load_rgb, load_row3, rgb_at, store};
+use super::{Directions, MAX_LOBE_PARAMS, direction, load_frame, load_rgb, rgb_at, store};
 use crate::closure::Closure;
 use crate::lobes::disney_clearcoat::DisneyClearcoat;
 use crate::lobes::disney_diffuse::DisneyDiffuse;
@@ -371,11 +371,7 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
             params[k] = Params::new(&raw[k][..job.slots[k].param_count]);
         }
         let p = S::prepare::<L>(&params);
-        let frame = LaneFrame {
-            t: load_row3(job.frame, len, 0, i),
-            b: load_row3(job.frame, len, 1, i),
-            n: load_row3(job.frame, len, 2, i),
-        };
+        let frame = load_frame::<L>(job.frame, len, i);
         let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
         let wi = direction(job.wi, i, L::LANES, job.directions, &mut unused);
         let (wo, wi) = (frame.to_local(wo), frame.to_local(wi));

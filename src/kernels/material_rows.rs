@@ -53,7 +53,7 @@ pub fn select<L: Lane>(
     let mut strongest_share = L::splat(f32::NEG_INFINITY);
     for k in 0..count {
         let w = weight[k];
-        let emitted = w.r.gt(zero) | w.g.gt(zero) | w.b.gt(zero);
+        let emitted = w.any_positive();
         let is_kept = emitted & share[k].ge(L::splat(prune));
         keep[k] = L::select(is_kept, one, zero);
         kept += keep[k];

@@ -435,9 +435,20 @@ fn rgb_at<L: Lane>(rows: &[f32], k: usize, stride: usize, i: usize) -> Rgb<L> {
     )
 }
 
+/// The frames of the register at lane `i` from nine rows of `stride` values (t, b, n,
+/// each x, y, z).
+#[inline(always)]
+fn load_frame<L: Lane>(frame: &[f32], stride: usize, i: usize) -> LaneFrame<L> {
+    LaneFrame {
+        t: load_axis(frame, stride, 0, i),
+        b: load_axis(frame, stride, 1, i),
+        n: load_axis(frame, stride, 2, i),
+    }
+}
+
 /// Frame axis `axis` (rows `3 axis .. 3 axis + 2` of `stride` values) at lane `i`.
 #[inline(always)]
-fn load_row3<L: Lane>(frame: &[f32], stride: usize, axis: usize, i: usize) -> Vec3<L> {
+fn load_axis<L: Lane>(frame: &[f32], stride: usize, axis: usize, i: usize) -> Vec3<L> {
     let row = 3 * axis * stride + i;
     Vec3::new(
         L::load(&frame[row..]),
@@ -492,11 +503,7 @@ fn for_each_register<M: Model, L: Lane>(
                 }
                 let prepared = M::prepare(Params::new(&raw[..param_count]));
                 let lanes = LaneLobe {
-                    frame: LaneFrame {
-                        t: load_row3(frame, stride, 0, i),
-                        b: load_row3(frame, stride, 1, i),
-                        n: load_row3(frame, stride, 2, i),
-                    },
+                    frame: load_frame(frame, stride, i),
                     weight: Rgb::new(
                         L::load(&weight[i..]),
                         L::load(&weight[stride + i..]),

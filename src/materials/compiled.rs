@@ -412,7 +412,7 @@ impl SlotVisitor for Emitter<'_> {
     #[inline(always)]
     fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
         let weight = self.scale * self.expansion.weight[k];
-        if !(weight.r > 0.0 || weight.g > 0.0 || weight.b > 0.0) {
+        if !weight.any_positive() {
             return Ok(());
         }
         let raw = &self.expansion.params[k][..params::block_size(M::PARAMS)];

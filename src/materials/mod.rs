@@ -206,7 +206,8 @@ pub trait MaterialType: Send + Sync {
         block: &[f32],
         scale: Rgb<f32>,
     ) -> Result<Emitted, Error>;
-    /// `expand` over staged lanes, in SIMD (material batches).
+    /// `expand` over staged lanes in SIMD, each slot decoded, estimated, pruned and
+    /// selected, and with `job.eval` the eval too (material batches: `kernels::expand`).
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>);
 }
 

@@ -167,6 +167,12 @@ impl<L: Lane> Rgb<L> {
             |x, y| L::select(mask, x, y),
         )
     }
+    /// The lanes where some channel is > 0.
+    #[inline(always)]
+    pub fn any_positive(self) -> L::Mask {
+        let zero = L::zero();
+        self.r.gt(zero) | self.g.gt(zero) | self.b.gt(zero)
+    }
     /// Rec. 709 luminance.
     #[inline(always)]
     pub fn luminance(self) -> L {
