@@ -18,7 +18,7 @@
 //! empty. A leading UTF-8 byte order mark is skipped. A `tangent` of `[0, 0, 0]`
 //! means "choose one", as an all-zero `glint_frame.tangent` does in the C API.
 
-use crate::closure::Closure;
+use crate::closure::{Closure, MAX_LOBES};
 use crate::error::{Error, Status};
 use crate::lobes::Transport;
 use crate::materials::{Material, ShadingContext};
@@ -474,7 +474,9 @@ fn add_material(
     let (weight, frame) = placement(entry, &at)?;
     let wo = closure.view().unwrap_or(frame.n);
     let ctx = ShadingContext::new(wo, frame);
-    material.emit(closure, &ctx, material.params(), Rgb::from_array(weight))?;
+    let mut shares = [0.0; MAX_LOBES];
+    let scale = Rgb::from_array(weight);
+    material.emit(closure, &ctx, material.params(), scale, &mut shares)?;
     Ok(())
 }
 

@@ -42,6 +42,59 @@ fn dot(a: Vec3<f32>, b: Vec3<f32>) -> f64 {
     V::from32(a).dot(V::from32(b))
 }
 
+/// `f` is orthonormal and right-handed (`b = n x t`) to 1e-6, in f64.
+fn assert_orthonormal(f: &Frame, what: &str) {
+    for (q, v) in [
+        ("t.n", dot(f.t, f.n)),
+        ("b.n", dot(f.b, f.n)),
+        ("t.b", dot(f.t, f.b)),
+        ("|t| - 1", dot(f.t, f.t).sqrt() - 1.0),
+        ("|b| - 1", dot(f.b, f.b).sqrt() - 1.0),
+    ] {
+        assert!(v.abs() <= 1e-6, "{what}: {q} = {v:e}");
+    }
+    let b = V::from32(f.n).cross(V::from32(f.t));
+    assert!((b - V::from32(f.b)).length() <= 1e-6, "{what}: b");
+}
+
+/// Tangents well off the normal (`Frame::new` builds these frames in f32 up to 30
+/// degrees from the normal, in f64 beyond): the frame's tangent is the normalized
+/// perpendicular part, to 1e-6 of the f64 Gram-Schmidt, at any length and with a
+/// normal a little off unit length.
+#[test]
+fn separated_tangents_give_their_perpendicular_part() {
+    for (n, p) in normals() {
+        let q = n.cross(p);
+        for k in 0..8 {
+            let angle = f64::from(k) * 0.8;
+            let perp = p * angle.cos() + q * angle.sin();
+            // Along the normal by these multiples of the perpendicular part: 1.73 is
+            // 30.02 degrees from it (f32), 1.74 29.9 (f64).
+            for along in [0.0, -0.3, 1.0, 1.73, -1.74, 10.0] {
+                for (scale, n_scale) in [1.0, 3.7, 1e-3, 1e4, 1e-12, 1e12]
+                    .into_iter()
+                    .flat_map(|s| [(s, 1.0), (s, 0.998)])
+                {
+                    let t = ((perp + n * along) * scale).to32();
+                    let nf = (n * n_scale).to32();
+                    let f = Frame::new(nf, Some(t));
+                    let what = format!("n {nf:?} t {t:?}: {f:?}");
+                    if n_scale == 1.0 {
+                        assert_orthonormal(&f, &what);
+                    }
+                    // The perpendicular part of the f32 tangent given, in f64 (a normal
+                    // off unit length too).
+                    let t64 = V::from32(t);
+                    let n64 = V::from32(nf);
+                    let want = (t64 - n64 * (n64.dot(t64) / n64.dot(n64))).normalize();
+                    let off = (V::from32(f.t) - want).length();
+                    assert!(off <= 1e-6, "{what}: tangent {off:e} from {want:?}");
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn nearly_parallel_tangents_give_orthonormal_frames() {
     for (n, p) in normals() {
@@ -50,18 +103,7 @@ fn nearly_parallel_tangents_give_orthonormal_frames() {
                 let t = ((n + p * eps) * scale).to32();
                 let f = Frame::new(n.to32(), Some(t));
                 let what = format!("n {n:?} perpendicular {eps:e} scale {scale}: {f:?}");
-                for (q, v) in [
-                    ("t.n", dot(f.t, f.n)),
-                    ("b.n", dot(f.b, f.n)),
-                    ("t.b", dot(f.t, f.b)),
-                    ("|t| - 1", dot(f.t, f.t).sqrt() - 1.0),
-                    ("|b| - 1", dot(f.b, f.b).sqrt() - 1.0),
-                ] {
-                    assert!(v.abs() <= 1e-6, "{what}: {q} = {v:e}");
-                }
-                // b = n x t, right-handed.
-                let b = V::from32(f.n).cross(V::from32(f.t));
-                assert!((b - V::from32(f.b)).length() <= 1e-6, "{what}: b");
+                assert_orthonormal(&f, &what);
                 // Where the tangent's perpendicular part is well above f32 rounding, it
                 // gives the frame's tangent.
                 if eps >= 1e-4 {

@@ -336,7 +336,7 @@ impl Closure {
         size: usize,
         decoded_size: usize,
     ) -> usize {
-        self.lobes.push(LobeInstance {
+        let instance = LobeInstance {
             lobe: lobe.clone(),
             type_id,
             weight,
@@ -346,7 +346,16 @@ impl Closure {
             decoded_start: (start + size) as u16,
             decoded_len: decoded_size as u16,
             probability: 0.0,
-        });
+        };
+        // `make_room` reserved the place. A push the compiler sees within capacity
+        // writes the record in place; one that may grow built it on the stack and
+        // copied it, reading 2-byte stores back as 8-byte loads (a store-forwarding
+        // stall per lobe: 14 ns of a Disney material's closure).
+        if self.lobes.len() < self.lobes.capacity() {
+            self.lobes.push(instance);
+        } else {
+            unreachable!("make_room reserves a lobe's place");
+        }
         self.params_len += size;
         self.lobe_count() - 1
     }

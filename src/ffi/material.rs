@@ -137,9 +137,12 @@ pub(crate) fn param_kind(param_type: u32, i: usize) -> Result<ParamKind, Error> 
     }
 }
 
-fn finite(v: glint_vec3, what: &str) -> Result<Vec3<f32>, Error> {
+/// Whether every component of `v` is finite. (Checked apart from building the
+/// context's vector: a `Result<Vec3>` went through the stack as two 4-byte stores read
+/// back as one 8-byte load, which stalled store forwarding.)
+fn check_finite(v: glint_vec3, what: &str) -> Result<(), Error> {
     if v.x.is_finite() && v.y.is_finite() && v.z.is_finite() {
-        Ok(Vec3::new(v.x, v.y, v.z))
+        Ok(())
     } else {
         Err(Error::new(
             Status::InvalidArgument,
@@ -179,12 +182,16 @@ pub(crate) fn shading_context(c: &glint_shading_context) -> Result<ShadingContex
             format!("context.uv ({}, {}) is not finite", c.uv[0], c.uv[1]),
         ));
     }
+    check_finite(c.position, "context.position")?;
+    check_finite(c.reference_position, "context.reference_position")?;
+    let p = c.position;
+    let r = c.reference_position;
     Ok(ShadingContext {
         wo,
         frame: Frame::new(normal, tangent),
         geometric_normal,
-        position: finite(c.position, "context.position")?,
-        reference_position: finite(c.reference_position, "context.reference_position")?,
+        position: Vec3::new(p.x, p.y, p.z),
+        reference_position: Vec3::new(r.x, r.y, r.z),
         footprint: c.footprint,
         uv: c.uv,
     })

@@ -3,8 +3,8 @@
 //! expansion, pruning and the closure.
 
 use super::{
-    Emitted, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, MaterialType, ShadingContext,
-    SlotModels, SlotVisitor,
+    Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, MaterialType, ShadingContext, SlotModels,
+    SlotVisitor,
 };
 use crate::closure::{Closure, MAX_LOBES};
 use crate::error::{Error, Status};
@@ -316,23 +316,29 @@ impl Material {
         block: &[f32],
     ) -> Result<(), Error> {
         closure.restart(Some(ctx.wo), Transport::Radiance);
-        let e = self.emit(closure, ctx, block, Rgb::new(1.0, 1.0, 1.0))?;
-        let kept = e.slots.count_ones() as usize;
-        let shape_id = self.shape_ids.get(e.slots as usize).copied();
-        closure.finish_with_shares(&e.shares[..kept], shape_id)
+        let mut shares = [0.0; MAX_LOBES];
+        let slots = self.emit(closure, ctx, block, Rgb::new(1.0, 1.0, 1.0), &mut shares)?;
+        let kept = slots.count_ones() as usize;
+        let shape_id = self.shape_ids.get(slots as usize).copied();
+        closure.finish_with_shares(&shares[..kept], shape_id)
     }
 
     /// Add the lobes of one shading point (`block`: the parameters with its overrides
     /// applied) to the open `closure`, their weights scaled by `scale`: expansion, then
-    /// pruning.
+    /// pruning. Returns the emitted slots (bit `k` for slot `k`; at least one: when
+    /// every lobe is below the threshold, the strongest is kept) and writes each added
+    /// lobe's `luminance(weight * albedo estimate(wo))`, in order, to `shares`, as
+    /// `Closure::finish` would compute it. (An out parameter: the emitter's scalar
+    /// stores read back as a returned array stalled store forwarding.)
     pub(crate) fn emit(
         &self,
         closure: &mut Closure,
         ctx: &ShadingContext,
         block: &[f32],
         scale: Rgb<f32>,
-    ) -> Result<Emitted, Error> {
-        self.kind.emit(self, closure, ctx, block, scale)
+        shares: &mut [f32; MAX_LOBES],
+    ) -> Result<u32, Error> {
+        self.kind.emit(self, closure, ctx, block, scale, shares)
     }
 
     /// The closure of one shading point, as a new value.
@@ -351,7 +357,8 @@ pub(crate) fn emit<M: MaterialModel>(
     ctx: &ShadingContext,
     block: &[f32],
     scale: Rgb<f32>,
-) -> Result<Emitted, Error> {
+    shares: &mut [f32; MAX_LOBES],
+) -> Result<u32, Error> {
     let local = ctx.lanes();
     let mut expansion = Expansion::default();
     M::expand(Params::new(block), &local, &mut expansion);
@@ -365,15 +372,15 @@ pub(crate) fn emit<M: MaterialModel>(
         wo: local.wo,
         expansion: &expansion,
         scale,
-        shares: [0.0; MAX_LOBES],
+        shares,
         emitted: 0,
         strongest: None,
     };
     M::Slots::visit(&mut emitter)?;
     let Emitter {
         closure,
-        mut shares,
-        mut emitted,
+        shares,
+        emitted,
         strongest,
         ..
     } = emitter;
@@ -383,12 +390,9 @@ pub(crate) fn emit<M: MaterialModel>(
         let weight = scale * expansion.weight[k];
         closure.push_lobe(lobe, *type_id, weight, ctx.frame, Some(raw))?;
         shares[0] = share;
-        emitted = 1 << k;
+        return Ok(1 << k);
     }
-    Ok(Emitted {
-        shares,
-        slots: emitted,
-    })
+    Ok(emitted)
 }
 
 /// [`emit`]'s walk over the slots.
@@ -401,7 +405,7 @@ struct Emitter<'a> {
     bake_wo: Option<Vec3<f32>>,
     expansion: &'a Expansion<f32>,
     scale: Rgb<f32>,
-    shares: [f32; MAX_LOBES],
+    shares: &'a mut [f32; MAX_LOBES],
     emitted: u32,
     /// The strongest pruned slot, kept when every slot is pruned.
     strongest: Option<(f32, usize)>,

@@ -176,17 +176,6 @@ slot_models!(A 0, B 1, C 2, D 3, E 4, F 5);
 slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6);
 slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7);
 
-/// The lobes one shading point's expansion added to a closure.
-#[derive(Clone, Copy, Debug)]
-pub struct Emitted {
-    /// Each added lobe's `luminance(weight * albedo estimate(wo))`, in order, as
-    /// `Closure::finish` would compute it.
-    pub shares: [f32; MAX_LOBES],
-    /// The emitted slots: bit `k` for slot `k` (at least one: when every lobe is below
-    /// the threshold, the strongest is kept).
-    pub slots: u32,
-}
-
 /// A material type as the registry sees it: object-safe, scalar.
 pub trait MaterialType: Send + Sync {
     fn name(&self) -> &str;
@@ -205,7 +194,8 @@ pub trait MaterialType: Send + Sync {
         ctx: &ShadingContext,
         block: &[f32],
         scale: Rgb<f32>,
-    ) -> Result<Emitted, Error>;
+        shares: &mut [f32; MAX_LOBES],
+    ) -> Result<u32, Error>;
     /// `expand` over staged lanes in SIMD, each slot decoded, estimated, pruned and
     /// selected, and with `job.eval` the eval too (material batches: `kernels::expand`).
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>);
@@ -257,8 +247,9 @@ impl<M: MaterialModel> MaterialType for BuiltinMaterial<M> {
         ctx: &ShadingContext,
         block: &[f32],
         scale: Rgb<f32>,
-    ) -> Result<Emitted, Error> {
-        compiled::emit::<M>(material, closure, ctx, block, scale)
+        shares: &mut [f32; MAX_LOBES],
+    ) -> Result<u32, Error> {
+        compiled::emit::<M>(material, closure, ctx, block, scale, shares)
     }
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>) {
         crate::kernels::expand::expand::<M>(kernels, job);

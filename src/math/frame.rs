@@ -2,7 +2,7 @@
 //! (seed 000 "Layering": layers may have their own bumped normals).
 
 use super::Lane;
-use super::vec::Vec3;
+use super::vec::{Vec3, inv_length};
 
 /// Tangent `t`, bitangent `b = n x t` and normal `n`, all unit length and orthogonal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,6 +41,9 @@ impl Frame {
     /// chosen with Duff et al. 2017 ("Building an Orthonormal Basis, Revisited").
     #[inline]
     pub fn new(n: Vec3<f32>, tangent: Option<Vec3<f32>>) -> Frame {
+        if let Some(frame) = tangent.and_then(|t| Self::with_separated_tangent(n, t)) {
+            return frame;
+        }
         let n64 = F64::from(n);
         let t = tangent.map(F64::from).and_then(|t| {
             // Divided by |n|^2: an f32 normal is unit only to ~1e-8, and that
@@ -61,6 +64,31 @@ impl Frame {
                 Frame { t, b, n }
             }
         }
+    }
+
+    /// [`Self::new`] in f32 where f32 is as accurate: a tangent at least 30 degrees
+    /// off the normal (`(n.t)^2 <= 3/4 |t|^2 |n|^2`), whose perpendicular part is then at
+    /// least half its length, so the rounding of `n.t` (a few ulps of `|t|`) leaves at
+    /// most twice that along `n` after normalizing. Otherwise None (the f64 path). The
+    /// common case (a host's tangent from its own frame) so skips f64 divisions and a
+    /// square root on every shading point.
+    #[inline(always)]
+    fn with_separated_tangent(n: Vec3<f32>, t: Vec3<f32>) -> Option<Frame> {
+        let (tt, nn) = (t.length_squared(), n.length_squared());
+        let nt = n.dot(t);
+        if !((1e-18..=1e18).contains(&tt) && nt * nt <= 0.75 * tt * nn) {
+            return None;
+        }
+        // Divided by |n|^2 as in f64 (a caller's normal may be off unit length); by
+        // `inv_length` squared, which needs no division for a unit normal.
+        let inv_n = inv_length(nn);
+        let perp = t - n * (nt * (inv_n * inv_n));
+        let t = perp * inv_length(perp.length_squared());
+        Some(Frame {
+            t,
+            b: n.cross(t),
+            n,
+        })
     }
 
     /// Relative size of a tangent's part perpendicular to the normal below which
