@@ -155,7 +155,10 @@ fn is_zero(v: glint_vec3) -> bool {
     v.x == 0.0 && v.y == 0.0 && v.z == 0.0
 }
 
-/// A checked shading context.
+/// A checked shading context. (Inlined: returned out of line, the context's scalar
+/// stores were read back as 16-byte loads when the caller moved it out of the
+/// `Result`, a store-forwarding stall in every material closure.)
+#[inline(always)]
 pub(crate) fn shading_context(c: &glint_shading_context) -> Result<ShadingContext, Error> {
     check_size(c, "context")?;
     let wo = vec3_in(c.wo, "context.wo")?;
@@ -472,10 +475,17 @@ pub unsafe extern "C" fn glint_material_closure(
         let (m, runtime) = unsafe { material_ref(material) }?;
         // SAFETY: per the contract.
         let ctx = shading_context(unsafe { deref(context, "context") }?)?;
-        let mut block = m.padded_params();
-        let block = &mut block[..m.params().len()];
-        // SAFETY: per the contract.
-        unsafe { apply_overrides(m, overrides, override_count, block) }?;
+        // The compiled block itself when nothing overrides it (no copy).
+        let mut padded;
+        let block = if override_count == 0 {
+            m.params()
+        } else {
+            padded = m.padded_params();
+            let block = &mut padded[..m.params().len()];
+            // SAFETY: per the contract.
+            unsafe { apply_overrides(m, overrides, override_count, block) }?;
+            block
+        };
         // SAFETY: per the contract.
         unsafe {
             place_built(runtime, arena, out, |closure| {

@@ -216,21 +216,34 @@ impl<L: Lane> Mul<L> for Rgb<L> {
 impl Vec3<f32> {
     /// A unit vector from user input: rejects NaN, infinities and vectors too short
     /// to normalize reliably (length below 1e-12), naming `what` in the error.
-    #[inline]
+    ///
+    /// The common case is inlined: returned out of line, the `Result`'s narrow stores
+    /// were read back as a wider load by the caller, a store-forwarding stall on every
+    /// scalar call's directions.
+    #[inline(always)]
     pub fn try_unit(x: f32, y: f32, z: f32, what: &str) -> Result<Self, crate::error::Error> {
+        // The batch kernels' rule, so scalar and batch calls see the same directions;
+        // a squared length in range implies finite components.
+        let v = Vec3::new(x, y, z);
+        let len2 = v.length_squared();
+        if (1e-24..=1e24).contains(&len2) {
+            return Ok(v * inv_length(len2));
+        }
+        Self::try_unit_far(x, y, z, what)
+    }
+
+    /// [`Self::try_unit`] outside the squared-length range: an error for a non-finite
+    /// or too short vector; lengths far from 1 normalized in f64 so they neither
+    /// underflow nor overflow.
+    #[cold]
+    #[inline(never)]
+    fn try_unit_far(x: f32, y: f32, z: f32, what: &str) -> Result<Self, crate::error::Error> {
         use crate::error::{Error, Status};
         if !(x.is_finite() && y.is_finite() && z.is_finite()) {
             return Err(Error::new(
                 Status::InvalidArgument,
                 format!("{what} = ({x}, {y}, {z}) is not finite"),
             ));
-        }
-        // The batch kernels' rule, so scalar and batch calls see the same directions;
-        // lengths far from 1 are normalized in f64 so they neither underflow nor overflow.
-        let v = Vec3::new(x, y, z);
-        let len2 = v.length_squared();
-        if (1e-24..=1e24).contains(&len2) {
-            return Ok(v * inv_length(len2));
         }
         let (dx, dy, dz) = (f64::from(x), f64::from(y), f64::from(z));
         let len = (dx * dx + dy * dy + dz * dz).sqrt();
