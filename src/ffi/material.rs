@@ -140,35 +140,44 @@ pub(crate) fn param_kind(param_type: u32, i: usize) -> Result<ParamKind, Error> 
 /// Whether every component of `v` is finite. (Checked apart from building the
 /// context's vector: a `Result<Vec3>` went through the stack as two 4-byte stores read
 /// back as one 8-byte load, which stalled store forwarding.)
+#[inline(always)]
 fn check_finite(v: glint_vec3, what: &str) -> Result<(), Error> {
     if v.x.is_finite() && v.y.is_finite() && v.z.is_finite() {
         Ok(())
     } else {
-        Err(Error::new(
-            Status::InvalidArgument,
-            format!("{what} ({}, {}, {}) is not finite", v.x, v.y, v.z),
-        ))
+        Err(not_finite(v, what))
     }
+}
+
+#[cold]
+fn not_finite(v: glint_vec3, what: &str) -> Error {
+    Error::new(
+        Status::InvalidArgument,
+        format!("{what} ({}, {}, {}) is not finite", v.x, v.y, v.z),
+    )
 }
 
 fn is_zero(v: glint_vec3) -> bool {
     v.x == 0.0 && v.y == 0.0 && v.z == 0.0
 }
 
-/// A checked shading context. (Inlined: returned out of line, the context's scalar
-/// stores were read back as 16-byte loads when the caller moved it out of the
-/// `Result`, a store-forwarding stall in every material closure.)
+/// The caller's context, checked, into `out`. (Written in place and inlined: a
+/// context returned in a `Result` was moved out of it, its scalar stores read back as
+/// wider loads, store-forwarding stalls in every material closure.)
 #[inline(always)]
-pub(crate) fn shading_context(c: &glint_shading_context) -> Result<ShadingContext, Error> {
+pub(crate) fn shading_context(
+    c: &glint_shading_context,
+    out: &mut ShadingContext,
+) -> Result<(), Error> {
     check_size(c, "context")?;
-    let wo = vec3_in(c.wo, "context.wo")?;
+    out.wo = vec3_in(c.wo, "context.wo")?;
     let normal = vec3_in(c.normal, "context.normal")?;
     let tangent = if is_zero(c.tangent) {
         None
     } else {
         Some(vec3_in(c.tangent, "context.tangent")?)
     };
-    let geometric_normal = if is_zero(c.geometric_normal) {
+    out.geometric_normal = if is_zero(c.geometric_normal) {
         normal
     } else {
         vec3_in(c.geometric_normal, "context.geometric_normal")?
@@ -187,17 +196,13 @@ pub(crate) fn shading_context(c: &glint_shading_context) -> Result<ShadingContex
     }
     check_finite(c.position, "context.position")?;
     check_finite(c.reference_position, "context.reference_position")?;
-    let p = c.position;
-    let r = c.reference_position;
-    Ok(ShadingContext {
-        wo,
-        frame: Frame::new(normal, tangent),
-        geometric_normal,
-        position: Vec3::new(p.x, p.y, p.z),
-        reference_position: Vec3::new(r.x, r.y, r.z),
-        footprint: c.footprint,
-        uv: c.uv,
-    })
+    let (p, r) = (c.position, c.reference_position);
+    out.frame = Frame::new(normal, tangent);
+    out.position = Vec3::new(p.x, p.y, p.z);
+    out.reference_position = Vec3::new(r.x, r.y, r.z);
+    out.footprint = c.footprint;
+    out.uv = c.uv;
+    Ok(())
 }
 
 /// The caller's overrides applied to `block`, a copy of the material's values.
@@ -474,7 +479,8 @@ pub unsafe extern "C" fn glint_material_closure(
         // SAFETY: per the contract.
         let (m, runtime) = unsafe { material_ref(material) }?;
         // SAFETY: per the contract.
-        let ctx = shading_context(unsafe { deref(context, "context") }?)?;
+        let mut ctx = ShadingContext::new(Vec3::splat(0.0, 0.0, 1.0), Frame::IDENTITY);
+        shading_context(unsafe { deref(context, "context") }?, &mut ctx)?;
         // The compiled block itself when nothing overrides it (no copy).
         let mut padded;
         let block = if override_count == 0 {

@@ -33,47 +33,52 @@ impl Frame {
     };
 
     /// Build a frame from a unit normal and an optional tangent hint. The tangent is
-    /// made orthogonal to `n` by Gram-Schmidt in f64, so the frame is orthonormal to f32
-    /// rounding even when the tangent is nearly parallel to `n` (in f32 the projection
-    /// `t - n (n.t)` would keep rounding errors of `n.t` along `n`). When the tangent is
-    /// missing, not finite, or its part perpendicular to `n` is below
-    /// [`Self::PARALLEL_TANGENT`] of its length (nothing left of it but rounding), one is
-    /// chosen with Duff et al. 2017 ("Building an Orthonormal Basis, Revisited").
-    #[inline]
+    /// made orthogonal to `n` by Gram-Schmidt (in f64 when it is nearly parallel to
+    /// `n`, where in f32 the projection `t - n (n.t)` would keep rounding errors of
+    /// `n.t` along `n`), so the frame is orthonormal to f32 rounding; the bitangent is
+    /// `n x t`. When the tangent is missing, not finite, or its part perpendicular to
+    /// `n` is below [`Self::PARALLEL_TANGENT`] of its length (nothing left of it but
+    /// rounding), one is chosen with Duff et al. 2017 ("Building an Orthonormal Basis,
+    /// Revisited").
+    ///
+    /// Inlined but for the f64 path, which returns the tangent alone (in registers):
+    /// out of line, or merged from two paths as whole frames or pairs of axes, the
+    /// frame went through memory and was read back with wider loads than its stores (a
+    /// store-forwarding stall at every shading point).
+    #[inline(always)]
     pub fn new(n: Vec3<f32>, tangent: Option<Vec3<f32>>) -> Frame {
-        if let Some(frame) = tangent.and_then(|t| Self::with_separated_tangent(n, t)) {
-            return frame;
-        }
-        let n64 = F64::from(n);
-        let t = tangent.map(F64::from).and_then(|t| {
-            // Divided by |n|^2: an f32 normal is unit only to ~1e-8, and that
-            // much of n.t ~ 1 would stay in a small perpendicular part.
-            let perp = t.sub(n64.scale(n64.dot(t) / n64.dot(n64)));
-            let len2 = perp.dot(perp);
-            (len2 > (Self::PARALLEL_TANGENT * Self::PARALLEL_TANGENT) * t.dot(t))
-                .then(|| perp.scale(1.0 / len2.sqrt()))
-        });
-        match t {
-            Some(t) => Frame {
-                t: t.to32(),
-                b: n64.cross(t).to32(),
-                n,
-            },
-            None => {
-                let (t, b) = duff_axes(n);
-                Frame { t, b, n }
-            }
-        }
+        let t = tangent
+            .and_then(|t| Self::separated_tangent(n, t).or_else(|| Self::near_tangent(n, t)));
+        let (t, b) = match t {
+            Some(t) => (t, n.cross(t)),
+            None => duff_axes(n),
+        };
+        Frame { t, b, n }
     }
 
-    /// [`Self::new`] in f32 where f32 is as accurate: a tangent at least 30 degrees
-    /// off the normal (`(n.t)^2 <= 3/4 |t|^2 |n|^2`), whose perpendicular part is then at
-    /// least half its length, so the rounding of `n.t` (a few ulps of `|t|`) leaves at
-    /// most twice that along `n` after normalizing. Otherwise None (the f64 path). The
-    /// common case (a host's tangent from its own frame) so skips f64 divisions and a
-    /// square root on every shading point.
+    /// [`Self::new`]'s tangent by Gram-Schmidt in f64, for a tangent within 30 degrees
+    /// of the normal or of a length out of [`Self::separated_tangent`]'s range; None
+    /// when nothing of it is left but rounding.
+    #[cold]
+    #[inline(never)]
+    fn near_tangent(n: Vec3<f32>, t: Vec3<f32>) -> Option<Vec3<f32>> {
+        let (n64, t) = (F64::from(n), F64::from(t));
+        // Divided by |n|^2: an f32 normal is unit only to ~1e-8, and that much of
+        // n.t ~ 1 would stay in a small perpendicular part.
+        let perp = t.sub(n64.scale(n64.dot(t) / n64.dot(n64)));
+        let len2 = perp.dot(perp);
+        (len2 > (Self::PARALLEL_TANGENT * Self::PARALLEL_TANGENT) * t.dot(t))
+            .then(|| perp.scale(1.0 / len2.sqrt()).to32())
+    }
+
+    /// [`Self::new`]'s tangent in f32 where f32 is as accurate: a tangent at least 30
+    /// degrees off the normal (`(n.t)^2 <= 3/4 |t|^2 |n|^2`), whose perpendicular part is
+    /// then at least half its length, so the rounding of `n.t` (a few ulps of `|t|`)
+    /// leaves at most twice that along `n` after normalizing. Otherwise None (the f64
+    /// path). The common case (a host's tangent from its own frame) so skips f64
+    /// divisions and a square root on every shading point.
     #[inline(always)]
-    fn with_separated_tangent(n: Vec3<f32>, t: Vec3<f32>) -> Option<Frame> {
+    fn separated_tangent(n: Vec3<f32>, t: Vec3<f32>) -> Option<Vec3<f32>> {
         let (tt, nn) = (t.length_squared(), n.length_squared());
         let nt = n.dot(t);
         if !((1e-18..=1e18).contains(&tt) && nt * nt <= 0.75 * tt * nn) {
@@ -83,12 +88,7 @@ impl Frame {
         // `inv_length` squared, which needs no division for a unit normal.
         let inv_n = inv_length(nn);
         let perp = t - n * (nt * (inv_n * inv_n));
-        let t = perp * inv_length(perp.length_squared());
-        Some(Frame {
-            t,
-            b: n.cross(t),
-            n,
-        })
+        Some(perp * inv_length(perp.length_squared()))
     }
 
     /// Relative size of a tangent's part perpendicular to the normal below which
@@ -154,14 +154,6 @@ impl F64 {
     }
     fn sub(self, o: F64) -> F64 {
         F64([self.0[0] - o.0[0], self.0[1] - o.0[1], self.0[2] - o.0[2]])
-    }
-    fn cross(self, o: F64) -> F64 {
-        let (a, b) = (self.0, o.0);
-        F64([
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ])
     }
 }
 
