@@ -490,6 +490,27 @@ fn slots_emitted_on_some_lanes_match_their_closures() {
     );
 }
 
+/// Per-lane anisotropy at the specular estimate's aspect nodes: a closure finds the
+/// nearest node by binary search, the batch by counting comparisons; the two agree on
+/// each midpoint between nodes and on the floats either side of it (midpoints from
+/// the table's node formula, `anisotropic = (1 - 10^-x) / 0.9` at `x = (k + 1/2) / 12`).
+#[test]
+fn per_lane_anisotropy_at_the_estimate_nodes_matches_the_closures() {
+    let description = r#"{"material": "disney", "anisotropic": 0.5, "roughness": 0.3}"#;
+    let mut values = Vec::new();
+    for k in 0..12 {
+        let x = (k as f64 + 0.5) / 12.0;
+        let m = ((1.0 - 10f64.powf(-x)) / 0.9) as f32;
+        values.extend([m.next_down(), m, m.next_up()]);
+    }
+    values.extend([0.0, 1e-30, 0.5, 1.0]);
+    let n = values.len() * 3;
+    let anisotropic: Vec<f32> = (0..n).map(|i| values[i % values.len()]).collect();
+    matches_closures(description, 0.0, n, 0xa150, |_| {
+        vec![("anisotropic", vec![anisotropic.clone()])]
+    });
+}
+
 /// Per-lane clearcoat gloss: the clearcoat's decode takes logarithms in f64, so the
 /// expansion decodes a block once and copies it while lanes repeat it. Whole registers
 /// of the material's own gloss, of 0, of -0 (the same value, other bits), of a new

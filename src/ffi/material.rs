@@ -121,20 +121,26 @@ pub struct glint_override {
     pub value: [f32; 3],
 }
 
-/// The kind `overrides[i].param_type` names (the message is only formatted on error:
-/// this runs per shading point).
+/// The kind `overrides[i].param_type` names (inlined, the message formatted only on
+/// error: this runs per override per shading point).
+#[inline(always)]
 pub(crate) fn param_kind(param_type: u32, i: usize) -> Result<ParamKind, Error> {
     match param_type {
         GLINT_PARAM_FLOAT => Ok(ParamKind::Float),
         GLINT_PARAM_RGB => Ok(ParamKind::Rgb),
         GLINT_PARAM_ENUM => Ok(ParamKind::Enum),
-        t => Err(Error::new(
-            Status::InvalidArgument,
-            format!(
-                "overrides[{i}]: param_type {t} is not GLINT_PARAM_FLOAT, GLINT_PARAM_RGB or GLINT_PARAM_ENUM"
-            ),
-        )),
+        t => Err(unknown_param_type(t, i)),
     }
+}
+
+#[cold]
+fn unknown_param_type(param_type: u32, i: usize) -> Error {
+    Error::new(
+        Status::InvalidArgument,
+        format!(
+            "overrides[{i}]: param_type {param_type} is not GLINT_PARAM_FLOAT, GLINT_PARAM_RGB or GLINT_PARAM_ENUM"
+        ),
+    )
 }
 
 /// Whether every component of `v` is finite. (Checked apart from building the

@@ -190,7 +190,9 @@ impl Material {
         Ok(())
     }
 
-    /// Override `i` applied to `out`, a block [`Self::apply`] started.
+    /// Override `i` applied to `out`, a block [`Self::apply`] started. (Inlined: it
+    /// runs per override per shading point; the checked path with its messages is not.)
+    #[inline(always)]
     pub fn apply_one(&self, i: usize, o: &Override, out: &mut [f32]) -> Result<(), Error> {
         // A float or rgb entry set in range (NaN is not): the common case, in place.
         if let Some(Some(slot)) = self.entries.get(o.param as usize) {
@@ -211,6 +213,8 @@ impl Material {
     }
 
     /// [`Self::apply_one`] with every check and its message.
+    #[cold]
+    #[inline(never)]
     fn apply_checked(&self, i: usize, o: &Override, out: &mut [f32]) -> Result<(), Error> {
         let slot = self.override_slot(i, o.param, o.kind)?;
         let value = &o.value[..o.kind.size()];
