@@ -3,6 +3,9 @@
 //! vector comes back unit, its direction that of the f64 normalization, whatever its
 //! length (denormal components to lengths whose square overflows f32).
 
+mod common;
+
+use common::Rng;
 use glint::math::Vec3;
 
 /// The f64 normalization of `(x, y, z)`, the reference.
@@ -67,13 +70,8 @@ fn vectors_shorter_than_1e_12_are_errors() {
 
 #[test]
 fn every_other_length_normalizes() {
-    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut rnd = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / 16_777_216.0 * 2.0 - 1.0
-    };
+    let mut rng = Rng::new(0xd1ec);
+    let mut rnd = move || rng.f32() * 2.0 - 1.0;
     // Lengths from just above the error threshold, through the squared-length range
     // [1e-24, 1e24] and near 1 (the series), to squares that overflow f32.
     for scale in [
