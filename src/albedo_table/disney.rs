@@ -220,6 +220,41 @@ fn sum_pairs<L: Lane, const C: usize>(pairs: &[u32], c: [(L, L); C]) -> (L, L) {
     (a * scale, b * scale)
 }
 
+/// One point's [`grid`]: the lower index as an integer (`pos` is at least 0, so its
+/// truncation is its floor).
+#[inline(always)]
+fn grid_one(x: f32, n: usize) -> (usize, f32) {
+    let pos = x.clamp(0.0, 1.0) * (n - 1) as f32;
+    // Through `i32`: a float's conversion to `usize` takes several more instructions.
+    let i = (pos as i32).min(n as i32 - 2);
+    (i as usize, pos - i as f32)
+}
+
+/// One point's bilinear interpolation over `cos_o` (stride 1) and a second axis (stride
+/// [`NM`]) from cell `base`: `table`'s window from the first corner to the last, and the
+/// corners' weights in [`corners`]' order (the same operations). A closure's build
+/// converted each float index of the lanes' path (several instructions each) and
+/// bounds-checked every lookup.
+#[inline(always)]
+fn bilinear_one<T>(
+    table: &[T],
+    base: usize,
+    (im, fm): (usize, f32),
+    (ir, fr): (usize, f32),
+) -> (&[T], [f32; 4]) {
+    let at = base + ir * NM + im;
+    let weights = [
+        (1.0 - fm) * (1.0 - fr),
+        fm * (1.0 - fr),
+        (1.0 - fm) * fr,
+        fm * fr,
+    ];
+    (&table[at..at + NM + 2], weights)
+}
+
+/// The corners of a [`bilinear_one`] window.
+const WINDOW_CORNERS: [usize; 4] = [0, 1, NM, NM + 1];
+
 /// The isotropic Disney specular's albedo table (module docs).
 pub struct SpecularTable;
 
@@ -280,6 +315,11 @@ impl SpecularTable {
     /// 99% of views and parameters, 17% at worst (anisotropic 0.9, `cos_o` below 0.003).
     #[inline(always)]
     pub fn estimate<L: Lane>(wo: Vec3<L>, roughness: L, anisotropic: L) -> (L, L) {
+        if L::LANES == 1 {
+            let wo = Vec3::new(wo.x.lane0(), wo.y.lane0(), wo.z.lane0());
+            let (a, b) = Self::estimate_one(wo, roughness.lane0(), anisotropic.lane0());
+            return (L::splat(a), L::splat(b));
+        }
         let m = grid(wo.z.clamp(L::zero(), L::one()).sqrt(), NM);
         let r = grid(roughness.max(L::zero()).sqrt(), NR);
         let (pairs, base) = if anisotropic.gt(L::zero()).any() {
@@ -291,6 +331,30 @@ impl SpecularTable {
             (Self::pairs(), L::zero())
         };
         sum_pairs::<L, 4>(pairs, corners(base, [(m.0, m.1, 1), (r.0, r.1, NM)]))
+    }
+
+    /// [`Self::estimate`] of one point, with integer indices.
+    #[inline(always)]
+    fn estimate_one(wo: Vec3<f32>, roughness: f32, anisotropic: f32) -> (f32, f32) {
+        let (pairs, base) = if anisotropic > 0.0 {
+            let (aspect, azimuth) = SpecularAnisotropicTable::nearest_node_indices(wo, anisotropic);
+            let base = (aspect + azimuth * NA) * NM * NR;
+            (SpecularAnisotropicTable::pairs(), base)
+        } else {
+            (Self::pairs(), 0)
+        };
+        let m = grid_one(wo.z.clamp(0.0, 1.0).sqrt(), NM);
+        let r = grid_one(roughness.max(0.0).sqrt(), NR);
+        let (window, weights) = bilinear_one(pairs, base, m, r);
+        let (mut a, mut b) = (0.0, 0.0);
+        for (corner, w) in WINDOW_CORNERS.into_iter().zip(weights) {
+            let pair = window[corner];
+            // As the scalar lane's `mul_add`, unfused.
+            a += w * (pair & 0xffff) as f32;
+            b += w * (pair >> 16) as f32;
+        }
+        let scale = 1.0 / f32::from(u16::MAX);
+        (a * scale, b * scale)
     }
 }
 
@@ -339,17 +403,6 @@ impl SpecularAnisotropicTable {
     #[inline(always)]
     fn nearest_nodes<L: Lane>(wo: Vec3<L>, anisotropic: L) -> (L, L) {
         let (aspects, tangents) = Self::midpoints();
-        if L::LANES == 1 {
-            // One point (a closure's build): the same counts by binary search, the
-            // comparisons being monotone along the sorted midpoints (x t rounds
-            // monotonically in t for x >= 0); the 30 comparisons cost a scalar
-            // estimate about 20 ns.
-            let a = anisotropic.lane0();
-            let (x, y) = (wo.x.abs().lane0(), wo.y.abs().lane0());
-            let aspect = aspects.partition_point(|&m| a > m);
-            let azimuth = tangents.partition_point(|&t| y > x * t);
-            return (L::splat(aspect as f32), L::splat(azimuth as f32));
-        }
         let (one, zero) = (L::one(), L::zero());
         let mut aspect = zero;
         for &a in aspects {
@@ -361,6 +414,20 @@ impl SpecularAnisotropicTable {
             azimuth += L::select(y.gt(x * L::splat(t)), one, zero);
         }
         (aspect, azimuth)
+    }
+
+    /// [`Self::nearest_nodes`] of one point: the same counts by binary search, the
+    /// comparisons being monotone along the sorted midpoints (`x t` rounds
+    /// monotonically in `t` for `x >= 0`); 30 comparisons cost a closure's build about
+    /// 20 ns.
+    #[inline(always)]
+    fn nearest_node_indices(wo: Vec3<f32>, anisotropic: f32) -> (usize, usize) {
+        let (aspects, tangents) = Self::midpoints();
+        let (x, y) = (wo.x.abs(), wo.y.abs());
+        (
+            aspects.partition_point(|&m| anisotropic > m),
+            tangents.partition_point(|&t| y > x * t),
+        )
     }
 
     /// The midpoints between aspect nodes, as `anisotropic`, and the tangents of the
@@ -441,6 +508,9 @@ impl ClearcoatTable {
     /// The albedo at `wo` (above the surface) for `gloss` in [0, 1].
     #[inline(always)]
     pub fn lookup<L: Lane>(wo: Vec3<L>, gloss: L) -> L {
+        if L::LANES == 1 {
+            return L::splat(Self::lookup_one(wo.z.lane0(), gloss.lane0()));
+        }
         let (im, fm) = grid(wo.z.clamp(L::zero(), L::one()).sqrt(), NM);
         let (ig, fg) = grid(gloss, NG);
         let c: [(L, L); 4] = corners(L::zero(), [(im, fm, 1), (ig, fg, NM)]);
@@ -448,6 +518,20 @@ impl ClearcoatTable {
         let mut sum = L::zero();
         for (cell, w) in c {
             sum = w.mul_add(L::gather(values, cell), sum);
+        }
+        sum
+    }
+
+    /// [`Self::lookup`] of one point, with integer indices.
+    #[inline(always)]
+    fn lookup_one(cos_o: f32, gloss: f32) -> f32 {
+        let m = grid_one(cos_o.clamp(0.0, 1.0).sqrt(), NM);
+        let g = grid_one(gloss, NG);
+        let (window, weights) = bilinear_one(Self::values(), 0, m, g);
+        let mut sum = 0.0;
+        for (corner, w) in WINDOW_CORNERS.into_iter().zip(weights) {
+            // As the scalar lane's `mul_add`, unfused.
+            sum += w * window[corner];
         }
         sum
     }
