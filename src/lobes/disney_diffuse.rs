@@ -336,11 +336,17 @@ impl Model for DisneyDiffuse {
         let r = p.roughness;
         let (t_poly, u_poly) = polynomial_moments();
         let a_d = fresnel_pair_moment(r - L::splat(0.5), r, a, schlick_weight(a), t_poly, u_poly);
-        let m = a.sqrt();
-        let [c0, c1, c2] = SS_FIT;
-        let a_ss = horner(m, c0) + r * (horner(m, c1) + r * horner(m, c2));
         let s = p.subsurface;
-        let total = a_d * (L::one() - s) + a_ss * s;
+        // Without subsurface (most materials) the blend is `a_d * 1 + a_ss * 0`, `a_d`'s
+        // bits: the fit's 27 coefficients are skipped.
+        let total = if s.gt(L::zero()).any() {
+            let m = a.sqrt();
+            let [c0, c1, c2] = SS_FIT;
+            let a_ss = horner(m, c0) + r * (horner(m, c1) + r * horner(m, c2));
+            a_d * (L::one() - s) + a_ss * s
+        } else {
+            a_d
+        };
         Rgb::select(wo.z.gt(L::zero()), p.base_color * total, Rgb::zero())
     }
 }
