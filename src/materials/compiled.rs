@@ -324,7 +324,7 @@ impl Material {
         let slots = self.emit(closure, ctx, block, Rgb::new(1.0, 1.0, 1.0), &mut shares)?;
         let kept = slots.count_ones() as usize;
         let shape_id = self.shape_ids.get(slots as usize).copied();
-        closure.finish_with_shares(&shares[..kept], shape_id)
+        closure.finish_with_shares(&mut shares[..kept], shape_id)
     }
 
     /// Add the lobes of one shading point (`block`: the parameters with its overrides
