@@ -228,7 +228,6 @@ fn stage_chunk(
         per_lane,
         frame: &rows.frame[..9 * len],
         wo: view3(&s.wo, len),
-        block_len: *material.block_lens(),
         prune: material.prune(),
         known: material.decoded_defaults(),
         decoded: grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len),

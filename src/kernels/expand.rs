@@ -36,8 +36,6 @@ pub struct ExpandJob<'a> {
     pub frame: &'a [f32],
     /// Unit `wo` in world space.
     pub wo: [&'a [f32]; 3],
-    /// Each slot's raw block length.
-    pub block_len: [usize; MAX_SLOTS],
     /// `Material::prune`: a slot whose share is below it is dropped.
     pub prune: f32,
     /// Decoded blocks known beforehand (`Material::decoded_defaults`): lanes whose slot
@@ -106,6 +104,18 @@ impl<L: Lane> SlotVisitor for Slots<'_, L> {
             let albedo = M::albedo_estimate(&p, self.wo, Transport::Radiance);
             self.share[k] = L::select(emitted, (weight * albedo).luminance(), zero);
         }
+        Ok(())
+    }
+}
+
+/// Each slot's weight and block zeroed.
+struct Zero<'e, L>(&'e mut Expansion<L>);
+
+impl<L: Lane> SlotVisitor for Zero<'_, L> {
+    #[inline(always)]
+    fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
+        self.0.weight[k] = Rgb::zero();
+        self.0.params[k][..block_size(M::PARAMS)].fill(L::zero());
         Ok(())
     }
 }
@@ -235,13 +245,10 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             uv: [L::zero(); 2],
         };
         // What is read back starts at zero for each register, as a fresh `Expansion`
-        // would (zeroing all of it costs more than the expansion).
-        for k in 0..count {
-            e.weight[k] = Rgb::zero();
-            for v in &mut e.params[k][..job.block_len[k]] {
-                *v = L::zero();
-            }
-        }
+        // would (zeroing all of it costs more than the expansion); by each slot's
+        // static block size, in registers (a runtime length was a `memset` call per
+        // slot per register), and dropped where `expand` writes.
+        M::Slots::visit(&mut Zero(&mut e)).expect("zeroing does not fail");
         M::expand(Params::new(&raw[..param_count]), &ctx, &mut e);
         let mut slots = Slots {
             i,

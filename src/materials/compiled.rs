@@ -163,11 +163,6 @@ impl Material {
         &self.decoded_defaults
     }
 
-    /// Each slot's raw block length.
-    pub(crate) fn block_lens(&self) -> &[usize; MAX_SLOTS] {
-        &self.block_lens
-    }
-
     /// The pruning threshold.
     pub fn prune(&self) -> f32 {
         self.prune
