@@ -361,8 +361,13 @@ pub(crate) fn emit<M: MaterialModel>(
     let local = ctx.lanes();
     let mut expansion = Expansion::default();
     M::expand(Params::new(block), &local, &mut expansion);
+    let candidates = expansion.weight[..M::Slots::NAMES.len()]
+        .iter()
+        .filter(|&&w| (scale * w).any_positive())
+        .count();
     let mut emitter = Emitter {
         material,
+        alone: candidates == 1,
         // Blocks are baked at the closure's `wo` (as `push_lobe` does); estimates
         // are at the context's.
         bake_wo: closure.view().map(|wo| ctx.frame.to_local(wo)),
@@ -408,6 +413,9 @@ struct Emitter<'a> {
     emitted: u32,
     /// The strongest pruned slot, kept when every slot is pruned.
     strongest: Option<(f32, usize)>,
+    /// Whether one slot alone has a weight: it is kept (pruned, it would be the
+    /// strongest) and chosen with probability 1, so its estimate is not needed.
+    alone: bool,
 }
 
 impl SlotVisitor for Emitter<'_> {
@@ -431,8 +439,12 @@ impl SlotVisitor for Emitter<'_> {
         if let Some(wo) = self.bake_wo {
             M::bake(decoded, wo, mode);
         }
-        let albedo = M::albedo_estimate(&M::prepare(Params::new(decoded)), self.wo, mode);
-        let share = (weight * albedo).luminance();
+        let share = if self.alone {
+            1.0
+        } else {
+            let albedo = M::albedo_estimate(&M::prepare(Params::new(decoded)), self.wo, mode);
+            (weight * albedo).luminance()
+        };
         if share < self.material.prune {
             if self.strongest.is_none_or(|(s, _)| share > s) {
                 self.strongest = Some((share, k));
