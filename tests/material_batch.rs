@@ -450,20 +450,26 @@ fn matches_closures(
 /// Pruning keeps several slots on some lanes, one on others, and on others falls back
 /// to the strongest pruned slot (a closure of one lobe whose albedo's luminance is
 /// below the threshold): a threshold of 0.2 over random base colors and views.
+/// Per-lane roughness uniform in [0, 1) and base color channels `u^power` (dark lanes
+/// more often with a higher power).
+fn roughness_and_color(rng: &mut Rng, n: usize, power: i32) -> LaneParams {
+    vec![
+        ("roughness", vec![(0..n).map(|_| rng.f32()).collect()]),
+        (
+            "base_color",
+            (0..3)
+                .map(|_| (0..n).map(|_| rng.f32().powi(power)).collect())
+                .collect(),
+        ),
+    ]
+}
+
 #[test]
 fn pruned_lanes_sample_eval_and_albedo_as_their_closures() {
     let description = r#"{"material": "disney", "metallic": 0.2, "clearcoat": 0.6,
         "sheen": 0.8, "anisotropic": 0.5, "subsurface": 0.4, "clearcoat_gloss": 0.7}"#;
     let outcomes = matches_closures(description, 0.2, 400, 0x5e1e, |rng| {
-        vec![
-            ("roughness", vec![(0..400).map(|_| rng.f32()).collect()]),
-            (
-                "base_color",
-                (0..3)
-                    .map(|_| (0..400).map(|_| rng.f32().powi(3)).collect())
-                    .collect(),
-            ),
-        ]
+        roughness_and_color(rng, 400, 3)
     });
     assert!(outcomes.iter().any(|&(k, _)| k > 1));
     assert!(outcomes.contains(&(1, false)) && outcomes.contains(&(1, true)));
@@ -488,6 +494,20 @@ fn slots_emitted_on_some_lanes_match_their_closures() {
         counts.contains(&1) && counts.contains(&2) && counts.contains(&3),
         "{counts:?}"
     );
+}
+
+/// Metals without clearcoat weight the specular alone on every lane: the closure and
+/// the batch add it without an albedo estimate, kept whatever its share (a prune of
+/// 0.9 is above it on dark lanes) and chosen with probability 1; per-lane roughness and
+/// base color, over registers and a tail.
+#[test]
+fn lanes_weighting_one_slot_alone_match_their_closures() {
+    let description = r#"{"material": "disney", "metallic": 1, "anisotropic": 0.3}"#;
+    let outcomes = matches_closures(description, 0.9, 37, 0x3e7a, |rng| {
+        roughness_and_color(rng, 37, 2)
+    });
+    assert!(outcomes.iter().all(|&(k, _)| k == 1), "{outcomes:?}");
+    assert!(outcomes.iter().any(|&(_, below)| below), "{outcomes:?}");
 }
 
 /// Per-lane anisotropy at the specular estimate's aspect nodes: a closure finds the

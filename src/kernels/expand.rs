@@ -77,6 +77,10 @@ struct Slots<'j, L> {
     /// Each slot's decoded block (its first `DECODED_LEN` values).
     decoded: &'j mut [[L; MAX_DECODED_LEN]; MAX_SLOTS],
     share: [L; MAX_SLOTS],
+    /// Whether no lane weights two slots: each lane's slot is chosen with probability
+    /// 1 whatever its share (`material_rows::select`), so no estimate is taken (as a
+    /// closure skips a slot's weighted alone).
+    alone: bool,
 }
 
 impl<L: Lane> SlotVisitor for Slots<'_, L> {
@@ -99,7 +103,9 @@ impl<L: Lane> SlotVisitor for Slots<'_, L> {
         let weight = self.expansion.weight[k];
         let zero = L::zero();
         let emitted = weight.any_positive();
-        if emitted.any() {
+        if self.alone {
+            self.share[k] = L::select(emitted, L::one(), zero);
+        } else if emitted.any() {
             let p = M::prepare(Params::new(decoded));
             let albedo = M::albedo_estimate(&p, self.wo, Transport::Radiance);
             self.share[k] = L::select(emitted, (weight * albedo).luminance(), zero);
@@ -259,6 +265,13 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             rows: job.eval.is_none().then_some(&mut *job.decoded),
             decoded: &mut decoded,
             share: [L::zero(); MAX_SLOTS],
+            alone: {
+                let mut weighted = L::zero();
+                for w in &e.weight[..count] {
+                    weighted += L::select(w.any_positive(), L::one(), L::zero());
+                }
+                weighted.le(L::one()).all()
+            },
         };
         M::Slots::visit(&mut slots).expect("a slot's staging does not fail");
         let share = slots.share;
