@@ -255,6 +255,14 @@ fn bilinear_one<T>(
 /// The corners of a [`bilinear_one`] window.
 const WINDOW_CORNERS: [usize; 4] = [0, 1, NM, NM + 1];
 
+/// `sum_k weights[k] values[k]` summed in pairs: a closure's build waits on this chain
+/// (in order, it was four additions long).
+#[inline(always)]
+fn weighted_sum(values: [f32; 4], weights: [f32; 4]) -> f32 {
+    (weights[0] * values[0] + weights[1] * values[1])
+        + (weights[2] * values[2] + weights[3] * values[3])
+}
+
 /// The isotropic Disney specular's albedo table (module docs).
 pub struct SpecularTable;
 
@@ -291,9 +299,15 @@ impl SpecularTable {
     /// [`SpecularAnisotropicTable`], whose first aspect node is this table.
     #[inline(always)]
     pub fn lookup<L: Lane>(wo: Vec3<L>, roughness: L, anisotropic: L) -> (L, L) {
+        let stretched = anisotropic.gt(L::zero());
+        if L::LANES == 1 && !stretched.any() {
+            // The estimate's path, so that the two agree to the bit where isotropic.
+            let wo = Vec3::new(wo.x.lane0(), wo.y.lane0(), wo.z.lane0());
+            let (a, b) = Self::estimate_one(wo, roughness.lane0(), 0.0);
+            return (L::splat(a), L::splat(b));
+        }
         let m = grid(wo.z.clamp(L::zero(), L::one()).sqrt(), NM);
         let r = grid(roughness.max(L::zero()).sqrt(), NR);
-        let stretched = anisotropic.gt(L::zero());
         if stretched.all() {
             return SpecularAnisotropicTable::lookup(wo, m, r, anisotropic);
         }
@@ -346,15 +360,12 @@ impl SpecularTable {
         let m = grid_one(wo.z.clamp(0.0, 1.0).sqrt(), NM);
         let r = grid_one(roughness.max(0.0).sqrt(), NR);
         let (window, weights) = bilinear_one(pairs, base, m, r);
-        let (mut a, mut b) = (0.0, 0.0);
-        for (corner, w) in WINDOW_CORNERS.into_iter().zip(weights) {
-            let pair = window[corner];
-            // As the scalar lane's `mul_add`, unfused.
-            a += w * (pair & 0xffff) as f32;
-            b += w * (pair >> 16) as f32;
-        }
+        let pairs = WINDOW_CORNERS.map(|corner| window[corner]);
         let scale = 1.0 / f32::from(u16::MAX);
-        (a * scale, b * scale)
+        (
+            weighted_sum(pairs.map(|p| (p & 0xffff) as f32), weights) * scale,
+            weighted_sum(pairs.map(|p| (p >> 16) as f32), weights) * scale,
+        )
     }
 }
 
@@ -528,11 +539,6 @@ impl ClearcoatTable {
         let m = grid_one(cos_o.clamp(0.0, 1.0).sqrt(), NM);
         let g = grid_one(gloss, NG);
         let (window, weights) = bilinear_one(Self::values(), 0, m, g);
-        let mut sum = 0.0;
-        for (corner, w) in WINDOW_CORNERS.into_iter().zip(weights) {
-            // As the scalar lane's `mul_add`, unfused.
-            sum += w * window[corner];
-        }
-        sum
+        weighted_sum(WINDOW_CORNERS.map(|corner| window[corner]), weights)
     }
 }
