@@ -42,7 +42,7 @@ use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
 use crate::fresnel::schlick_weight;
-use crate::math::vmath::horner;
+use crate::math::vmath::estrin9;
 use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
 
@@ -342,7 +342,7 @@ impl Model for DisneyDiffuse {
         let total = if s.gt(L::zero()).any() {
             let m = a.sqrt();
             let [c0, c1, c2] = SS_FIT;
-            let a_ss = horner(m, c0) + r * (horner(m, c1) + r * horner(m, c2));
+            let a_ss = estrin9(m, c0) + r * (estrin9(m, c1) + r * estrin9(m, c2));
             a_d * (L::one() - s) + a_ss * s
         } else {
             a_d

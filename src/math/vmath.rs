@@ -51,6 +51,24 @@ pub fn horner<L: Lane, const N: usize>(x: L, c: [f32; N]) -> L {
     p
 }
 
+/// [`horner`]'s degree-8 polynomial by Estrin's scheme: terms in pairs, then pairs of
+/// pairs with `x^2` and `x^4`: a dependency chain of 4 multiply-adds after `x^8`
+/// instead of 8 in a row (a scalar lane's are unfused, two operations each). Rounds
+/// differently from [`horner`].
+#[inline(always)]
+pub fn estrin9<L: Lane>(x: L, c: [f32; 9]) -> L {
+    // Plain functions: a closure would lose the kernel's target features.
+    #[inline(always)]
+    fn pair<L: Lane>(hi: f32, lo: f32, x: L) -> L {
+        L::splat(hi).mul_add(x, L::splat(lo))
+    }
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let low = pair(c[5], c[6], x).mul_add(x2, pair(c[7], c[8], x));
+    let high = pair(c[1], c[2], x).mul_add(x2, pair(c[3], c[4], x));
+    L::splat(c[0]).mul_add(x4 * x4, high.mul_add(x4, low))
+}
+
 /// Whether `L::mul_add` rounds once: `(1 + 2^-12)^2 - (1 + 2^-11) = 2^-24` survives only
 /// when fused. A constant expression per lane type, so the branches on it fold away.
 #[inline(always)]
