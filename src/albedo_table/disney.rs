@@ -231,29 +231,27 @@ fn grid_one(x: f32, n: usize) -> (usize, f32) {
 }
 
 /// One point's bilinear interpolation over `cos_o` (stride 1) and a second axis (stride
-/// [`NM`]) from cell `base`: `table`'s window from the first corner to the last, and the
-/// corners' weights in [`corners`]' order (the same operations). A closure's build
-/// converted each float index of the lanes' path (several instructions each) and
-/// bounds-checked every lookup.
+/// [`NM`]) from cell `base`: the four corners' values and weights, in [`corners`]' order
+/// (the same weights). A closure's build converted each float index of the lanes' path
+/// (several instructions each) and bounds-checked every lookup; here one window of the
+/// table is checked once.
 #[inline(always)]
-fn bilinear_one<T>(
+fn bilinear_one<T: Copy>(
     table: &[T],
     base: usize,
     (im, fm): (usize, f32),
     (ir, fr): (usize, f32),
-) -> (&[T], [f32; 4]) {
+) -> ([T; 4], [f32; 4]) {
     let at = base + ir * NM + im;
+    let window = &table[at..at + NM + 2];
     let weights = [
         (1.0 - fm) * (1.0 - fr),
         fm * (1.0 - fr),
         (1.0 - fm) * fr,
         fm * fr,
     ];
-    (&table[at..at + NM + 2], weights)
+    ([window[0], window[1], window[NM], window[NM + 1]], weights)
 }
-
-/// The corners of a [`bilinear_one`] window.
-const WINDOW_CORNERS: [usize; 4] = [0, 1, NM, NM + 1];
 
 /// `sum_k weights[k] values[k]` summed in pairs: a closure's build waits on this chain
 /// (in order, it was four additions long).
@@ -359,8 +357,7 @@ impl SpecularTable {
         };
         let m = grid_one(wo.z.clamp(0.0, 1.0).sqrt(), NM);
         let r = grid_one(roughness.max(0.0).sqrt(), NR);
-        let (window, weights) = bilinear_one(pairs, base, m, r);
-        let pairs = WINDOW_CORNERS.map(|corner| window[corner]);
+        let (pairs, weights) = bilinear_one(pairs, base, m, r);
         let scale = 1.0 / f32::from(u16::MAX);
         (
             weighted_sum(pairs.map(|p| (p & 0xffff) as f32), weights) * scale,
@@ -538,7 +535,7 @@ impl ClearcoatTable {
     fn lookup_one(cos_o: f32, gloss: f32) -> f32 {
         let m = grid_one(cos_o.clamp(0.0, 1.0).sqrt(), NM);
         let g = grid_one(gloss, NG);
-        let (window, weights) = bilinear_one(Self::values(), 0, m, g);
-        weighted_sum(WINDOW_CORNERS.map(|corner| window[corner]), weights)
+        let (values, weights) = bilinear_one(Self::values(), 0, m, g);
+        weighted_sum(values, weights)
     }
 }
