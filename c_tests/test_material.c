@@ -513,6 +513,93 @@ static void batch_errors(void **state)
     glint_material_destroy(m);
 }
 
+/* Counts far beyond the arrays are refused by every material batch before any lane is
+ * read or written (the arrays hold N lanes). */
+static void huge_material_batch_counts_are_refused(void **state)
+{
+    fixture *fx = *state;
+    glint_material *m = paint(fx);
+    lanes_data *d = calloc(1, sizeof *d);
+    const size_t counts[] = {(size_t)1 << 40, (size_t)1 << 62, SIZE_MAX};
+    float out[10][N];
+    glint_material_lanes l;
+    size_t k;
+    int i;
+    assert_non_null(d);
+    lanes_init(fx, d, &l, m);
+    for (i = 0; i < 10; i++)
+        fill_floats(out[i], N, -7.0f);
+    for (k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+        glint_material_eval_batch_args e;
+        glint_material_pdf_batch_args p;
+        glint_material_sample_batch_args s;
+        glint_material_albedo_batch_args a;
+        memset(&e, 0, sizeof e);
+        memset(&p, 0, sizeof p);
+        memset(&s, 0, sizeof s);
+        memset(&a, 0, sizeof a);
+        l.count = counts[k];
+        e.struct_size = sizeof e, p.struct_size = sizeof p;
+        s.struct_size = sizeof s, a.struct_size = sizeof a;
+        e.lanes = p.lanes = s.lanes = a.lanes = l;
+        e.wi_x = p.wi_x = d->wi[0], e.wi_y = p.wi_y = d->wi[1], e.wi_z = p.wi_z = d->wi[2];
+        e.value_r = out[0], e.value_g = out[1], e.value_b = out[2], e.pdf = out[3];
+        p.pdf = out[3];
+        s.u_lobe = d->u[0], s.u0 = d->u[1], s.u1 = d->u[2];
+        s.wi_x = out[4], s.wi_y = out[5], s.wi_z = out[6], s.pdf = out[3];
+        s.weight_r = out[7], s.weight_g = out[8], s.weight_b = out[9];
+        a.albedo_r = out[0], a.albedo_g = out[1], a.albedo_b = out[2];
+        check_error(fx, glint_material_eval_batch(&e), GLINT_ERROR_OUT_OF_RANGE);
+        check_error(fx, glint_material_pdf_batch(&p), GLINT_ERROR_OUT_OF_RANGE);
+        check_error(fx, glint_material_sample_batch(&s), GLINT_ERROR_OUT_OF_RANGE);
+        check_error(fx, glint_material_albedo_batch(&a), GLINT_ERROR_OUT_OF_RANGE);
+        assert_error_mentions("count");
+    }
+    for (i = 0; i < 10; i++) {
+        int j;
+        for (j = 0; j < N; j++)
+            assert_true(out[i][j] == -7.0f);
+    }
+    free(d);
+    glint_material_destroy(m);
+}
+
+/* A material may outlive its runtime (destroying a runtime does not destroy its
+ * materials): its calls then fail as invalid handles, naming the runtime, and it can
+ * still be destroyed. Closures built before stay valid until the runtime goes. */
+static void materials_outliving_their_runtime_are_invalid(void **state)
+{
+    fixture *fx = *state;
+    glint_runtime *rt = NULL;
+    glint_arena *arena = NULL;
+    glint_material *m = NULL;
+    glint_closure *out = (glint_closure *)fx;
+    glint_shading_context c = context_init();
+    lanes_data *d = calloc(1, sizeof *d);
+    glint_material_lanes l;
+    glint_material_albedo_batch_args a;
+    float albedo[3][N];
+    assert_non_null(d);
+    assert_ok(glint_runtime_create("threads=1", &rt));
+    assert_ok(glint_arena_create(2, &arena));
+    assert_ok(glint_material_create(rt, PAINT, &m));
+    lanes_init(fx, d, &l, m);
+    glint_runtime_destroy(rt);
+    check_error(fx, glint_material_closure(m, arena, &c, NULL, 0, &out),
+                GLINT_ERROR_INVALID_HANDLE);
+    assert_error_mentions("runtime");
+    assert_null(out);
+    memset(&a, 0, sizeof a);
+    a.struct_size = sizeof a;
+    a.lanes = l;
+    a.albedo_r = albedo[0], a.albedo_g = albedo[1], a.albedo_b = albedo[2];
+    check_error(fx, glint_material_albedo_batch(&a), GLINT_ERROR_INVALID_HANDLE);
+    assert_error_mentions("runtime");
+    glint_material_destroy(m);
+    glint_arena_destroy(arena);
+    free(d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -531,6 +618,10 @@ int main(void)
         cmocka_unit_test_setup_teardown(batches_equal_the_lanes_closures, fixture_setup,
                                         fixture_teardown),
         cmocka_unit_test_setup_teardown(batch_errors, fixture_setup, fixture_teardown),
+        cmocka_unit_test_setup_teardown(huge_material_batch_counts_are_refused, fixture_setup,
+                                        fixture_teardown),
+        cmocka_unit_test_setup_teardown(materials_outliving_their_runtime_are_invalid,
+                                        fixture_setup, fixture_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

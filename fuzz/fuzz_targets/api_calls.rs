@@ -1,6 +1,9 @@
 //! Sequences of C API calls decoded from bytes: runtimes, arenas, closure building
 //! (blocks and JSON), scalar and per-lobe queries, and batches with arbitrary counts,
-//! active masks, per-lane closures and floats (NaN, Inf, denormals included).
+//! active masks, per-lane closures and floats (NaN, Inf, denormals included);
+//! compiled materials (JSON documents and parameter blocks, destroyed and outliving
+//! their runtime), their closures from arbitrary shading contexts and overrides, and
+//! material batches with arbitrary lanes and per-lane overrides.
 //!
 //! Valid but hostile: every pointer passed is NULL or valid for what the contract
 //! says (arrays hold `count` elements; closures are used only while their arena has
@@ -155,6 +158,127 @@ enum Op {
         active: Option<Vec<u8>>,
         floats: Vec<F>,
     },
+    CreateMaterial {
+        runtime: u8,
+        doc: MaterialDoc,
+    },
+    CreateMaterialParams {
+        runtime: u8,
+        type_id: u8,
+        /// The type's defaults with some floats replaced (`count` of them passed), or NULL.
+        params: Option<Vec<(u8, F)>>,
+        count: u8,
+    },
+    DestroyMaterial(u8),
+    MaterialClosure {
+        material: u8,
+        arena: u8,
+        context: Option<Context>,
+        struct_size: u8,
+        overrides: Option<Vec<OverrideIn>>,
+    },
+    MaterialBatch {
+        kind: BatchKind,
+        material: u8,
+        count: u16,
+        active: Option<Vec<u8>>,
+        tangent: bool,
+        /// Each override's parameter (an index or element address) and type; its
+        /// values are columns of `floats`.
+        overrides: Vec<(u32, u8)>,
+        floats: Vec<F>,
+    },
+    MaterialTypeQuery {
+        runtime: u8,
+        type_id: u8,
+        param: u8,
+        name: String,
+    },
+}
+
+/// The disney material's parameters, then names no material has.
+const MATERIAL_KEYS: [&str; 13] = [
+    "base_color",
+    "subsurface",
+    "metallic",
+    "specular",
+    "specular_tint",
+    "roughness",
+    "anisotropic",
+    "sheen",
+    "sheen_tint",
+    "clearcoat",
+    "clearcoat_gloss",
+    "colour",
+    "lobes",
+];
+
+/// A material description: `{"material": "disney", ...}` with some keys set (a
+/// number or a triple, whichever the key wants or not; non-finite numbers are not
+/// JSON), or any text.
+#[derive(Arbitrary, Debug)]
+enum MaterialDoc {
+    Disney(Vec<(u8, bool, F, F, F)>),
+    Text(String),
+}
+
+impl MaterialDoc {
+    fn text(&self) -> String {
+        match self {
+            MaterialDoc::Text(t) => t.clone(),
+            MaterialDoc::Disney(keys) => {
+                let mut doc = String::from("{\"material\": \"disney\"");
+                for (key, triple, a, b, c) in keys {
+                    let key = MATERIAL_KEYS[*key as usize % MATERIAL_KEYS.len()];
+                    if *triple {
+                        doc += &format!(", \"{key}\": [{}, {}, {}]", a.0, b.0, c.0);
+                    } else {
+                        doc += &format!(", \"{key}\": {}", a.0);
+                    }
+                }
+                doc + "}"
+            }
+        }
+    }
+}
+
+/// A shading context's fields (zero vectors where `None`: the automatic tangent, the
+/// shading normal as the geometric one).
+#[derive(Arbitrary, Debug)]
+struct Context {
+    wo: V3,
+    normal: V3,
+    tangent: Option<V3>,
+    geometric_normal: Option<V3>,
+    position: V3,
+    reference_position: V3,
+    footprint: F,
+    uv: (F, F),
+}
+
+/// One override of a material closure: parameter (index or element address), type
+/// (one past the known ones too) and value.
+#[derive(Arbitrary, Debug)]
+struct OverrideIn {
+    param: u32,
+    param_type: u8,
+    value: [F; 3],
+}
+
+/// A parameter index, often one of the first few (real parameters), sometimes with
+/// an element, sometimes anything.
+fn param_index(p: u32) -> u32 {
+    match p % 4 {
+        0 | 1 => (p >> 2) % 12,
+        2 => ((p >> 2) % 12) | ((p >> 8) % 3) << GLINT_PARAM_ELEMENT_SHIFT,
+        _ => p,
+    }
+}
+
+struct MaterialHandle {
+    handle: *mut glint_material,
+    /// Its runtime's index, `None` once that runtime is destroyed (calls must fail).
+    runtime: Option<usize>,
 }
 
 struct Closure {
@@ -168,18 +292,21 @@ struct State {
     runtimes: Vec<*mut glint_runtime>,
     arenas: Vec<*mut glint_arena>,
     closures: Vec<Closure>,
+    materials: Vec<MaterialHandle>,
 }
 
 fn pick<T>(v: &[T], i: u8) -> Option<&T> {
     (!v.is_empty()).then(|| &v[i as usize % v.len()])
 }
 
+/// One of the statuses the library defines (every `glint::Status`).
+fn known_status(st: glint_status) -> bool {
+    usize::try_from(st).is_ok_and(|s| s < glint::Status::ALL.len())
+}
+
 /// A failing call must name a known status and leave a message.
 fn check_status(st: glint_status, what: &str) {
-    assert!(
-        st <= GLINT_ERROR_PLUGIN_BLOCK_SIZE,
-        "{what}: unknown status {st}"
-    );
+    assert!(known_status(st), "{what}: unknown status {st}");
     assert_ne!(st, GLINT_ERROR_PANIC, "{what}: panic");
     if st != GLINT_OK && st != GLINT_NO_SAMPLE {
         // SAFETY: glint_last_error returns a NUL-terminated string valid until the next
@@ -290,6 +417,14 @@ impl State {
                     if c.runtime == moved {
                         c.runtime = i;
                     }
+                }
+                // Materials outlive their runtime: their calls must fail from now on.
+                for m in &mut self.materials {
+                    m.runtime = match m.runtime {
+                        Some(r) if r == i => None,
+                        Some(r) if r == moved => Some(i),
+                        r => r,
+                    };
                 }
             }
             Op::CreateArena(capacity) => self.add_arena(capacity as usize % 70),
@@ -545,6 +680,411 @@ impl State {
                 active,
                 floats,
             } => self.batch(kind, count as usize % 300, lanes, active, floats),
+            Op::CreateMaterial { runtime, doc } => {
+                let Some(&rt) = pick(&self.runtimes, runtime) else {
+                    return;
+                };
+                let text: Vec<u8> = doc.text().bytes().take_while(|b| *b != 0).collect();
+                let text = CString::new(text).expect("no NUL");
+                let mut out = null_mut();
+                // SAFETY: a live runtime; text NUL-terminated; out writable.
+                let st = unsafe { glint_material_create(rt, text.as_ptr(), &mut out) };
+                check_status(st, "glint_material_create");
+                self.add_material(st, out, runtime);
+            }
+            Op::CreateMaterialParams {
+                runtime,
+                type_id,
+                params,
+                count,
+            } => {
+                let Some(&rt) = pick(&self.runtimes, runtime) else {
+                    return;
+                };
+                let type_id = u32::from(type_id % 3);
+                let block = params.map(|edits| {
+                    let mut block = vec![0.5f32; 64];
+                    let mut info = material_info();
+                    // SAFETY: a live runtime; out writable with struct_size set.
+                    let size = if unsafe { glint_material_type_info(rt, type_id, &mut info) }
+                        == GLINT_OK
+                    {
+                        info.param_block_size as usize
+                    } else {
+                        16
+                    };
+                    for (at, v) in &edits {
+                        block[*at as usize % 64] = v.0;
+                    }
+                    // The whole block, or a wrong count.
+                    block.truncate(if count % 4 == 0 {
+                        count as usize % 64
+                    } else {
+                        size
+                    });
+                    block
+                });
+                let mut out = null_mut();
+                // SAFETY: a live runtime; params NULL (count 0) or `len` floats.
+                let st = unsafe {
+                    glint_material_create_from_params(
+                        rt,
+                        type_id,
+                        block.as_ref().map_or(null(), |b| b.as_ptr()),
+                        block.as_ref().map_or(0, Vec::len),
+                        &mut out,
+                    )
+                };
+                check_status(st, "glint_material_create_from_params");
+                self.add_material(st, out, runtime);
+            }
+            Op::DestroyMaterial(i) => {
+                if self.materials.is_empty() {
+                    return;
+                }
+                let m = self
+                    .materials
+                    .swap_remove(i as usize % self.materials.len());
+                // SAFETY: a live material, destroyed once (removed from the list).
+                unsafe { glint_material_destroy(m.handle) };
+            }
+            Op::MaterialClosure {
+                material,
+                arena,
+                context,
+                struct_size,
+                overrides,
+            } => self.material_closure(material, arena, context, struct_size, overrides),
+            Op::MaterialBatch {
+                kind,
+                material,
+                count,
+                active,
+                tangent,
+                overrides,
+                floats,
+            } => {
+                let n = count as usize % 300;
+                self.material_batch(kind, material, n, active, tangent, overrides, floats)
+            }
+            Op::MaterialTypeQuery {
+                runtime,
+                type_id,
+                param,
+                name,
+            } => self.material_type_query(runtime, type_id, param, name),
+        }
+    }
+
+    fn add_material(&mut self, st: glint_status, handle: *mut glint_material, runtime: u8) {
+        if st == GLINT_OK {
+            assert!(!handle.is_null());
+            if self.materials.len() >= 4 {
+                // SAFETY: just created, destroyed once.
+                unsafe { glint_material_destroy(handle) };
+                return;
+            }
+            let runtime = Some(runtime as usize % self.runtimes.len());
+            self.materials.push(MaterialHandle { handle, runtime });
+        } else {
+            assert!(
+                handle.is_null(),
+                "failed material constructor wrote a handle"
+            );
+        }
+    }
+
+    fn material(&self, i: u8) -> (*const glint_material, Option<usize>) {
+        pick(&self.materials, i).map_or((null(), None), |m| (m.handle, m.runtime))
+    }
+
+    fn material_closure(
+        &mut self,
+        material: u8,
+        arena: u8,
+        context: Option<Context>,
+        struct_size: u8,
+        overrides: Option<Vec<OverrideIn>>,
+    ) {
+        let Some(&a) = pick(&self.arenas, arena) else {
+            return;
+        };
+        let (m, runtime) = self.material(material);
+        let zero = glint_vec3::default();
+        let full = size_of::<glint_shading_context>() as u32;
+        let context = context.map(|c| glint_shading_context {
+            // Too small for some fields, or larger (a newer header's) than this one.
+            struct_size: match struct_size % 8 {
+                0 => 0,
+                1 => 8,
+                2 => full - 4,
+                _ => full,
+            },
+            wo: c.wo.c(),
+            normal: c.normal.c(),
+            tangent: c.tangent.map_or(zero, V3::c),
+            geometric_normal: c.geometric_normal.map_or(zero, V3::c),
+            position: c.position.c(),
+            reference_position: c.reference_position.c(),
+            footprint: c.footprint.0,
+            uv: [c.uv.0.0, c.uv.1.0],
+        });
+        let overrides: Option<Vec<glint_override>> = overrides.map(|o| {
+            o.iter()
+                .map(|o| glint_override {
+                    param: param_index(o.param),
+                    param_type: u32::from(o.param_type % 5),
+                    value: o.value.map(|v| v.0),
+                })
+                .collect()
+        });
+        let mut out = null_mut();
+        // SAFETY: material NULL, live or destroyed-but-quarantined (with a live or
+        // quarantined runtime); a live arena; context NULL or readable; overrides NULL
+        // or `len` entries; out writable.
+        let st = unsafe {
+            glint_material_closure(
+                m,
+                a,
+                context.as_ref().map_or(null(), |c| c),
+                overrides.as_ref().map_or(null(), |o| o.as_ptr()),
+                overrides.as_ref().map_or(0, Vec::len),
+                &mut out,
+            )
+        };
+        check_status(st, "glint_material_closure");
+        if st != GLINT_OK {
+            assert!(
+                out.is_null(),
+                "failed glint_material_closure wrote a handle"
+            );
+            return;
+        }
+        let runtime = runtime.expect("a closure from a material whose runtime is gone");
+        self.place(st, out, arena as usize % self.arenas.len(), runtime);
+        // The closure is finished: its queries succeed at an ordinary direction.
+        let mut albedo = [0.0f32; 3];
+        let wo = glint_vec3 {
+            x: 0.3,
+            y: 0.2,
+            z: 0.9,
+        };
+        // SAFETY: a live finished closure; 3 writable floats.
+        let st = unsafe { glint_albedo(out, wo, albedo.as_mut_ptr()) };
+        assert_eq!(st, GLINT_OK, "albedo of a material closure");
+        check_values(st, "material closure albedo", &albedo);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn material_batch(
+        &self,
+        kind: BatchKind,
+        material: u8,
+        n: usize,
+        active: Option<Vec<u8>>,
+        tangent: bool,
+        overrides: Vec<(u32, u8)>,
+        floats: Vec<F>,
+    ) {
+        let (m, runtime) = self.material(material);
+        let active: Option<Vec<u8>> =
+            active.map(|a| (0..n).map(|i| a.get(i).copied().unwrap_or(1) % 3).collect());
+        let is_active = |i: usize| active.as_ref().is_none_or(|a| a[i] != 0);
+        let overrides: Vec<(u32, u8)> = overrides.into_iter().take(4).collect();
+        // Columns from the fuzzer's floats (cycled), else 0.5: wo, normal, tangent,
+        // wi or u, then three per override.
+        let columns = 12 + 3 * overrides.len();
+        let column = |k: usize| -> Vec<f32> {
+            (0..n)
+                .map(|i| match floats.len() {
+                    0 => 0.5,
+                    len => floats[(i * columns + k) % len].0,
+                })
+                .collect()
+        };
+        let inputs: Vec<Vec<f32>> = (0..columns).map(column).collect();
+        let lanes_overrides: Vec<glint_override_lanes> = overrides
+            .iter()
+            .enumerate()
+            .map(|(j, &(param, kind))| glint_override_lanes {
+                param: param_index(param),
+                param_type: u32::from(kind % 5),
+                value: [0, 1, 2].map(|c| inputs[12 + 3 * j + c].as_ptr()),
+            })
+            .collect();
+        let lanes = glint_material_lanes {
+            material: m,
+            count: n,
+            active: active.as_ref().map_or(null(), |a| a.as_ptr()),
+            wo_x: inputs[0].as_ptr(),
+            wo_y: inputs[1].as_ptr(),
+            wo_z: inputs[2].as_ptr(),
+            normal_x: inputs[3].as_ptr(),
+            normal_y: inputs[4].as_ptr(),
+            normal_z: inputs[5].as_ptr(),
+            tangent_x: if tangent { inputs[6].as_ptr() } else { null() },
+            tangent_y: if tangent { inputs[7].as_ptr() } else { null() },
+            tangent_z: if tangent { inputs[8].as_ptr() } else { null() },
+            overrides: if lanes_overrides.is_empty() {
+                null()
+            } else {
+                lanes_overrides.as_ptr()
+            },
+            override_count: lanes_overrides.len(),
+        };
+        let mut out: Vec<Vec<f32>> = (0..12).map(|_| vec![f32::NAN; n]).collect();
+        let mut words: Vec<Vec<u32>> = (0..3).map(|_| vec![u32::MAX; n]).collect();
+        let [o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, o11] = &mut out[..] else {
+            unreachable!()
+        };
+        let [flags, lobe, component] = &mut words[..] else {
+            unreachable!()
+        };
+        let wi = [9, 10, 11].map(|k| inputs[k].as_ptr());
+        let (st, checked): (glint_status, Vec<&[f32]>) = match kind {
+            BatchKind::Eval { pdf_reverse } => {
+                let args = glint_material_eval_batch_args {
+                    struct_size: size_of::<glint_material_eval_batch_args>() as u32,
+                    lanes,
+                    wi_x: wi[0],
+                    wi_y: wi[1],
+                    wi_z: wi[2],
+                    value_r: o0.as_mut_ptr(),
+                    value_g: o1.as_mut_ptr(),
+                    value_b: o2.as_mut_ptr(),
+                    pdf: o3.as_mut_ptr(),
+                    pdf_reverse: if pdf_reverse {
+                        o4.as_mut_ptr()
+                    } else {
+                        null_mut()
+                    },
+                };
+                // SAFETY: every array holds `n` elements; the material NULL, live or
+                // quarantined.
+                let st = unsafe { glint_material_eval_batch(&args) };
+                let mut checked: Vec<&[f32]> = vec![o0, o1, o2, o3];
+                if pdf_reverse {
+                    checked.push(o4);
+                }
+                (st, checked)
+            }
+            BatchKind::Pdf => {
+                let args = glint_material_pdf_batch_args {
+                    struct_size: size_of::<glint_material_pdf_batch_args>() as u32,
+                    lanes,
+                    wi_x: wi[0],
+                    wi_y: wi[1],
+                    wi_z: wi[2],
+                    pdf: o0.as_mut_ptr(),
+                };
+                // SAFETY: as above.
+                let st = unsafe { glint_material_pdf_batch(&args) };
+                (st, vec![o0])
+            }
+            BatchKind::Sample { optional } => {
+                let opt = |bit: u8, p: *mut f32| if optional & bit != 0 { p } else { null_mut() };
+                let word = |bit: u8, p: *mut u32| if optional & bit != 0 { p } else { null_mut() };
+                let args = glint_material_sample_batch_args {
+                    struct_size: size_of::<glint_material_sample_batch_args>() as u32,
+                    lanes,
+                    u_lobe: wi[0],
+                    u0: wi[1],
+                    u1: wi[2],
+                    wi_x: o9.as_mut_ptr(),
+                    wi_y: o10.as_mut_ptr(),
+                    wi_z: o11.as_mut_ptr(),
+                    pdf: o3.as_mut_ptr(),
+                    weight_r: o4.as_mut_ptr(),
+                    weight_g: o5.as_mut_ptr(),
+                    weight_b: o6.as_mut_ptr(),
+                    value_r: opt(1, o0.as_mut_ptr()),
+                    value_g: opt(1, o1.as_mut_ptr()),
+                    value_b: opt(1, o2.as_mut_ptr()),
+                    flags: word(2, flags.as_mut_ptr()),
+                    lobe: word(4, lobe.as_mut_ptr()),
+                    eta: opt(8, o7.as_mut_ptr()),
+                    roughness: opt(16, o8.as_mut_ptr()),
+                    component: word(32, component.as_mut_ptr()),
+                };
+                // SAFETY: as above.
+                let st = unsafe { glint_material_sample_batch(&args) };
+                let mut checked: Vec<&[f32]> = vec![o3, o4, o5, o6];
+                if optional & 1 != 0 {
+                    checked.extend([&o0[..], &o1[..], &o2[..]]);
+                }
+                for w in [&o9[..], &o10[..], &o11[..]] {
+                    for (i, x) in w.iter().enumerate() {
+                        assert!(
+                            !is_active(i) || st != GLINT_OK || x.is_finite(),
+                            "material sample batch wi {x}"
+                        );
+                    }
+                }
+                (st, checked)
+            }
+            BatchKind::Albedo => {
+                let args = glint_material_albedo_batch_args {
+                    struct_size: size_of::<glint_material_albedo_batch_args>() as u32,
+                    lanes,
+                    albedo_r: o0.as_mut_ptr(),
+                    albedo_g: o1.as_mut_ptr(),
+                    albedo_b: o2.as_mut_ptr(),
+                };
+                // SAFETY: as above.
+                let st = unsafe { glint_material_albedo_batch(&args) };
+                (st, vec![o0, o1, o2])
+            }
+        };
+        check_status(st, "material batch");
+        if runtime.is_none() && n > 0 {
+            assert_ne!(st, GLINT_OK, "a material batch without a live material");
+        }
+        for column in checked {
+            for (i, x) in column.iter().enumerate() {
+                if is_active(i) {
+                    assert!(
+                        st != GLINT_OK || (x.is_finite() && *x >= 0.0),
+                        "material batch lane {i}: {x} on GLINT_OK"
+                    );
+                } else {
+                    assert!(x.is_nan(), "material batch lane {i}: inactive lane written");
+                }
+            }
+        }
+    }
+
+    fn material_type_query(&self, runtime: u8, type_id: u8, param: u8, name: String) {
+        let Some(&rt) = pick(&self.runtimes, runtime) else {
+            return;
+        };
+        let Ok(name) = CString::new(name) else { return };
+        let (type_id, param) = (u32::from(type_id % 3), u32::from(param % 14));
+        let mut info = material_info();
+        let mut pinfo = param_info();
+        let (mut count, mut id, mut index) = (0, 0, 0);
+        // SAFETY: a live runtime; strings NUL-terminated; outs writable with
+        // struct_size set.
+        unsafe {
+            check_status(
+                glint_material_type_count(rt, &mut count),
+                "material_type_count",
+            );
+            check_status(
+                glint_material_type_find(rt, name.as_ptr(), &mut id),
+                "material_type_find",
+            );
+            check_status(
+                glint_material_type_info(rt, type_id, &mut info),
+                "material_type_info",
+            );
+            check_status(
+                glint_material_param_info(rt, type_id, param, &mut pinfo),
+                "material_param_info",
+            );
+            check_status(
+                glint_material_param_find(rt, type_id, name.as_ptr(), &mut index),
+                "material_param_find",
+            );
         }
     }
 
@@ -670,7 +1210,12 @@ impl State {
                 // SAFETY: every array holds `n` elements; closures live (or NULL, or
                 // not dereferenceable only on inactive lanes).
                 let st = unsafe { glint_eval_batch(&args) };
-                (st, vec![o0, o1, o2, o3, o4])
+                // The reverse pdf only where asked for (else its column is not written).
+                let mut checked: Vec<&[f32]> = vec![o0, o1, o2, o3];
+                if pdf_reverse {
+                    checked.push(o4);
+                }
+                (st, checked)
             }
             BatchKind::Pdf => {
                 let args = glint_pdf_batch_args {
@@ -809,6 +1354,17 @@ fn lobe_info() -> glint_lobe_info {
     }
 }
 
+fn material_info() -> glint_material_info {
+    glint_material_info {
+        struct_size: size_of::<glint_material_info>() as u32,
+        name: null(),
+        summary: null(),
+        param_count: 0,
+        param_block_size: 0,
+        lobe_count: 0,
+    }
+}
+
 fn param_info() -> glint_param_info {
     glint_param_info {
         struct_size: size_of::<glint_param_info>() as u32,
@@ -833,6 +1389,10 @@ fn param_info() -> glint_param_info {
 
 impl Drop for State {
     fn drop(&mut self) {
+        for m in &self.materials {
+            // SAFETY: live materials, destroyed once.
+            unsafe { glint_material_destroy(m.handle) };
+        }
         for &a in &self.arenas {
             // SAFETY: live arenas, destroyed once, before their closures' runtimes.
             unsafe { glint_arena_destroy(a) };
