@@ -394,6 +394,65 @@ static void closure_lobe_needs_a_finished_closure(void **state)
     assert_true(probability == 1.0f);
 }
 
+/* A handle of one kind passed as another (a host mixing up its void pointers) is refused
+ * as an invalid handle: every handle begins with its tag, so the check reads within the
+ * object, and the closure handle carries generation bits (its arena was reset once) that
+ * must not make the other kinds' checks fault. Destroys of the wrong kind are ignored,
+ * and every handle still works afterwards. */
+static void handles_of_another_kind_are_refused(void **state)
+{
+    fixture *fx = *state;
+    glint_runtime *rt = NULL;
+    glint_arena *arena = NULL;
+    glint_material *m = NULL;
+    glint_closure *c = NULL, *out = NULL;
+    glint_shading_context ctx;
+    const char *isa = NULL;
+    uint32_t n = 0;
+    void *handles[4];
+    int i;
+    assert_ok(glint_runtime_create("threads=1", &rt));
+    assert_ok(glint_arena_create(4, &arena));
+    assert_ok(glint_material_create(rt, "{\"material\": \"disney\"}", &m));
+    from_json(rt, arena, LAMBERT);
+    assert_ok(glint_arena_reset(arena));
+    c = from_json(rt, arena, LAMBERT);
+    memset(&ctx, 0, sizeof ctx);
+    ctx.struct_size = sizeof ctx;
+    ctx.wo = test_wo();
+    ctx.normal = v3(0.0f, 0.0f, 1.0f);
+    handles[0] = rt, handles[1] = arena, handles[2] = m, handles[3] = c;
+    for (i = 0; i < 4; i++) {
+        if (i != 0) {
+            check_error(fx, glint_runtime_isa((glint_runtime *)handles[i], &isa),
+                        GLINT_ERROR_INVALID_HANDLE);
+            glint_runtime_destroy((glint_runtime *)handles[i]);
+        }
+        if (i != 1) {
+            check_error(fx, glint_arena_reset((glint_arena *)handles[i]),
+                        GLINT_ERROR_INVALID_HANDLE);
+            glint_arena_destroy((glint_arena *)handles[i]);
+        }
+        if (i != 2) {
+            check_error(fx, glint_material_closure((glint_material *)handles[i], arena, &ctx,
+                                                   NULL, 0, &out),
+                        GLINT_ERROR_INVALID_HANDLE);
+            glint_material_destroy((glint_material *)handles[i]);
+        }
+        if (i != 3)
+            check_error(fx, glint_closure_lobe_count((glint_closure *)handles[i], &n),
+                        GLINT_ERROR_INVALID_HANDLE);
+    }
+    assert_ok(glint_runtime_isa(rt, &isa));
+    assert_ok(glint_closure_lobe_count(c, &n));
+    assert_true(n == 1);
+    assert_ok(glint_material_closure(m, arena, &ctx, NULL, 0, &out));
+    assert_ok(glint_arena_reset(arena));
+    glint_material_destroy(m);
+    glint_arena_destroy(arena);
+    glint_runtime_destroy(rt);
+}
+
 int main(void)
 {
 #define T(f) cmocka_unit_test_setup_teardown(f, fixture_setup, fixture_teardown)
@@ -408,6 +467,7 @@ int main(void)
         T(inactive_lane_handle_is_not_read),
         T(failing_calls_zero_their_outputs),
         T(closure_lobe_needs_a_finished_closure),
+        T(handles_of_another_kind_are_refused),
     };
 #undef T
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -14,6 +14,29 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/*
+ The runtime handle: a small shell around what the runtime owns.
+ */
+typedef struct glint_runtime glint_runtime;
+
+/*
+ An arena of closures owned by the caller; one thread at a time. A small shell
+ around its slots.
+ */
+typedef struct glint_arena glint_arena;
+
+/*
+ A closure: built inside an arena, immutable and thread-safe once finished.
+ */
+typedef struct glint_closure glint_closure;
+
+/*
+ A compiled material: a material type with its parameters validated and resolved
+ once (`glint_material_create`). Immutable and thread-safe; a small shell around
+ the material.
+ */
+typedef struct glint_material glint_material;
+
 #define GLINT_VERSION_MAJOR 0
 
 #define GLINT_VERSION_MINOR 1
@@ -119,29 +142,6 @@
 #define GLINT_MAX_BATCH_COUNT 4294967295
 
 /*
- An arena of closures owned by the caller; one thread at a time. A small shell
- (see `handle`) around its slots.
- */
-typedef struct glint_arena glint_arena;
-
-/*
- A closure: built inside an arena, immutable and thread-safe once finished.
- */
-typedef struct glint_closure glint_closure;
-
-/*
- A compiled material: a material type with its parameters validated and resolved
- once (`glint_material_create`). Immutable and thread-safe; a small shell (see
- `handle`) around the material.
- */
-typedef struct glint_material glint_material;
-
-/*
- The runtime handle: a small shell (see `handle`) around what the runtime owns.
- */
-typedef struct glint_runtime glint_runtime;
-
-/*
  A status code: 0 (`GLINT_OK`) on success. A failing call (any status but
  `GLINT_OK`, including `GLINT_NO_SAMPLE`) leaves every output it was given in one
  state, set before anything else is checked: output handles NULL, numbers and ids
@@ -164,11 +164,11 @@ typedef struct glint_eval_batch_args {
   /*
    The closure of every lane, used when `closures` is NULL.
    */
-  const struct glint_closure *closure;
+  const glint_closure *closure;
   /*
    One closure per lane (`count` entries), or NULL.
    */
-  const struct glint_closure *const *closures;
+  const glint_closure *const *closures;
   /*
    Optional: `count` bytes, 0 = skip the lane.
    */
@@ -198,8 +198,8 @@ typedef struct glint_pdf_batch_args {
    */
   uint32_t struct_size;
   size_t count;
-  const struct glint_closure *closure;
-  const struct glint_closure *const *closures;
+  const glint_closure *closure;
+  const glint_closure *const *closures;
   const uint8_t *active;
   const float *wo_x;
   const float *wo_y;
@@ -220,8 +220,8 @@ typedef struct glint_sample_batch_args {
    */
   uint32_t struct_size;
   size_t count;
-  const struct glint_closure *closure;
-  const struct glint_closure *const *closures;
+  const glint_closure *closure;
+  const glint_closure *const *closures;
   const uint8_t *active;
   const float *wo_x;
   const float *wo_y;
@@ -263,8 +263,8 @@ typedef struct glint_albedo_batch_args {
    */
   uint32_t struct_size;
   size_t count;
-  const struct glint_closure *closure;
-  const struct glint_closure *const *closures;
+  const glint_closure *closure;
+  const glint_closure *const *closures;
   const uint8_t *active;
   const float *wo_x;
   const float *wo_y;
@@ -290,7 +290,7 @@ typedef struct glint_override_lanes {
  context (`wo` and the shading frame) and the textured parameters.
  */
 typedef struct glint_material_lanes {
-  const struct glint_material *material;
+  const glint_material *material;
   size_t count;
   /*
    Optional: `count` bytes, 0 = skip the lane.
@@ -805,7 +805,7 @@ glint_status glint_material_albedo_batch(const struct glint_material_albedo_batc
  # Safety
  `out` is NULL or writable.
  */
-glint_status glint_arena_create(size_t capacity, struct glint_arena **out);
+glint_status glint_arena_create(size_t capacity, glint_arena **out);
 
 /*
  Free every closure of the arena at once. Their handles become invalid, and any
@@ -816,7 +816,7 @@ glint_status glint_arena_create(size_t capacity, struct glint_arena **out);
  # Safety
  `arena` is NULL or a handle from `glint_arena_create` (see `glint_arena_destroy`).
  */
-glint_status glint_arena_reset(struct glint_arena *arena);
+glint_status glint_arena_reset(glint_arena *arena);
 
 /*
  Destroy an arena and its closures (NULL is ignored). Afterwards a call with the
@@ -831,7 +831,7 @@ glint_status glint_arena_reset(struct glint_arena *arena);
  # Safety
  `arena` is NULL or a handle from `glint_arena_create`.
  */
-void glint_arena_destroy(struct glint_arena *arena);
+void glint_arena_destroy(glint_arena *arena);
 
 /*
  Begin a closure in `arena`. `wo` (world space, toward the viewer) may be NULL; when
@@ -841,7 +841,7 @@ void glint_arena_destroy(struct glint_arena *arena);
  # Safety
  Handles are NULL or live; `wo` NULL or readable; `out` NULL or writable.
  */
-glint_status glint_closure_begin(const struct glint_runtime *runtime, struct glint_arena *arena, const struct glint_vec3 *wo, uint32_t flags, struct glint_closure **out);
+glint_status glint_closure_begin(const glint_runtime *runtime, glint_arena *arena, const struct glint_vec3 *wo, uint32_t flags, glint_closure **out);
 
 /*
  Add a lobe of type `type_id` with RGB `weight` (>= 0) in `frame`. `params` holds
@@ -855,7 +855,7 @@ glint_status glint_closure_begin(const struct glint_runtime *runtime, struct gli
  `closure` is NULL or live and not finished elsewhere; `weight` NULL or 3 floats;
  `frame` NULL or readable; `params` NULL or `param_count` floats.
  */
-glint_status glint_closure_add_lobe(struct glint_closure *closure, uint32_t type_id, const float *weight, const struct glint_frame *frame, const float *params, size_t param_count, uint32_t *out_index);
+glint_status glint_closure_add_lobe(glint_closure *closure, uint32_t type_id, const float *weight, const struct glint_frame *frame, const float *params, size_t param_count, uint32_t *out_index);
 
 /*
  Finish a closure: fixes lobe selection; afterwards it is immutable and may be
@@ -864,7 +864,7 @@ glint_status glint_closure_add_lobe(struct glint_closure *closure, uint32_t type
  # Safety
  `closure` is NULL or live.
  */
-glint_status glint_closure_finish(struct glint_closure *closure);
+glint_status glint_closure_finish(glint_closure *closure);
 
 /*
  Build and finish a whole closure from the JSON description `json_text` (see the README).
@@ -873,7 +873,7 @@ glint_status glint_closure_finish(struct glint_closure *closure);
  Handles are NULL or live; `json_text` NULL or NUL-terminated; `wo` NULL or readable;
  `out` NULL or writable.
  */
-glint_status glint_closure_from_json(const struct glint_runtime *runtime, struct glint_arena *arena, const char *json_text, const struct glint_vec3 *wo, struct glint_closure **out);
+glint_status glint_closure_from_json(const glint_runtime *runtime, glint_arena *arena, const char *json_text, const struct glint_vec3 *wo, glint_closure **out);
 
 /*
  Number of lobes in a closure.
@@ -881,7 +881,7 @@ glint_status glint_closure_from_json(const struct glint_runtime *runtime, struct
  # Safety
  `closure` NULL or live; `out` NULL or writable.
  */
-glint_status glint_closure_lobe_count(const struct glint_closure *closure, uint32_t *out);
+glint_status glint_closure_lobe_count(const glint_closure *closure, uint32_t *out);
 
 /*
  The type id and selection probability of lobe `index`.
@@ -889,7 +889,7 @@ glint_status glint_closure_lobe_count(const struct glint_closure *closure, uint3
  # Safety
  `closure` NULL or live; `type_id` and `probability` NULL or writable.
  */
-glint_status glint_closure_lobe(const struct glint_closure *closure, uint32_t index, uint32_t *type_id, float *probability);
+glint_status glint_closure_lobe(const glint_closure *closure, uint32_t index, uint32_t *type_id, float *probability);
 
 /*
  The closure at `(wo, wi)`: `sum_k weight_k f_k |cos theta_i|`, the mixture pdf
@@ -900,7 +900,7 @@ glint_status glint_closure_lobe(const struct glint_closure *closure, uint32_t in
  # Safety
  `closure` NULL or live; `out` NULL or writable with `struct_size` set.
  */
-glint_status glint_eval(const struct glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
+glint_status glint_eval(const glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
 
 /*
  `glint_eval` without the reverse pdf: value and pdf only, each lobe evaluated
@@ -909,7 +909,7 @@ glint_status glint_eval(const struct glint_closure *closure, struct glint_vec3 w
  # Safety
  As `glint_eval`.
  */
-glint_status glint_eval_forward(const struct glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
+glint_status glint_eval_forward(const glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
 
 /*
  Sample the closure: `u_lobe` picks a lobe, `u0`, `u1` a direction (all in [0, 1)).
@@ -919,7 +919,7 @@ glint_status glint_eval_forward(const struct glint_closure *closure, struct glin
  # Safety
  `closure` NULL or live; `out` NULL or writable with `struct_size` set.
  */
-glint_status glint_sample(const struct glint_closure *closure, struct glint_vec3 wo, float u_lobe, float u0, float u1, struct glint_sample_result *out);
+glint_status glint_sample(const glint_closure *closure, struct glint_vec3 wo, float u_lobe, float u0, float u1, struct glint_sample_result *out);
 
 /*
  The mixture pdf of sampling `wi` from `wo`.
@@ -927,7 +927,7 @@ glint_status glint_sample(const struct glint_closure *closure, struct glint_vec3
  # Safety
  `closure` NULL or live; `out` NULL or writable.
  */
-glint_status glint_pdf(const struct glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, float *out);
+glint_status glint_pdf(const glint_closure *closure, struct glint_vec3 wo, struct glint_vec3 wi, float *out);
 
 /*
  Directional albedo `R(wo)` of the closure (RGB, written to `out[0..3]`).
@@ -935,7 +935,7 @@ glint_status glint_pdf(const struct glint_closure *closure, struct glint_vec3 wo
  # Safety
  `closure` NULL or live; `out` NULL or 3 writable floats.
  */
-glint_status glint_albedo(const struct glint_closure *closure, struct glint_vec3 wo, float *out);
+glint_status glint_albedo(const glint_closure *closure, struct glint_vec3 wo, float *out);
 
 /*
  Lobe `lobe` alone: `weight f |cos theta_i|` and that lobe's own pdfs.
@@ -943,7 +943,7 @@ glint_status glint_albedo(const struct glint_closure *closure, struct glint_vec3
  # Safety
  As `glint_eval`.
  */
-glint_status glint_eval_lobe(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
+glint_status glint_eval_lobe(const glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
 
 /*
  `glint_eval_lobe` without the reverse pdf (`out->pdf_reverse` is set to 0).
@@ -951,7 +951,7 @@ glint_status glint_eval_lobe(const struct glint_closure *closure, uint32_t lobe,
  # Safety
  As `glint_eval`.
  */
-glint_status glint_eval_lobe_forward(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
+glint_status glint_eval_lobe_forward(const glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, struct glint_eval_result *out);
 
 /*
  Sample lobe `lobe` alone (`u_c` chooses among its discrete events, e.g. reflect or
@@ -960,7 +960,7 @@ glint_status glint_eval_lobe_forward(const struct glint_closure *closure, uint32
  # Safety
  As `glint_sample`.
  */
-glint_status glint_sample_lobe(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, float u_c, float u0, float u1, struct glint_sample_result *out);
+glint_status glint_sample_lobe(const glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, float u_c, float u0, float u1, struct glint_sample_result *out);
 
 /*
  The pdf of lobe `lobe` alone.
@@ -968,7 +968,7 @@ glint_status glint_sample_lobe(const struct glint_closure *closure, uint32_t lob
  # Safety
  As `glint_pdf`.
  */
-glint_status glint_pdf_lobe(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, float *out);
+glint_status glint_pdf_lobe(const glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, struct glint_vec3 wi, float *out);
 
 /*
  `weight * albedo(wo)` of lobe `lobe` alone.
@@ -976,7 +976,7 @@ glint_status glint_pdf_lobe(const struct glint_closure *closure, uint32_t lobe, 
  # Safety
  As `glint_albedo`.
  */
-glint_status glint_albedo_lobe(const struct glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, float *out);
+glint_status glint_albedo_lobe(const glint_closure *closure, uint32_t lobe, struct glint_vec3 wo, float *out);
 
 /*
  Number of material types; their ids are `0 .. count - 1`.
@@ -984,7 +984,7 @@ glint_status glint_albedo_lobe(const struct glint_closure *closure, uint32_t lob
  # Safety
  `runtime` is NULL or valid; `out` is NULL or writable.
  */
-glint_status glint_material_type_count(const struct glint_runtime *runtime, uint32_t *out);
+glint_status glint_material_type_count(const glint_runtime *runtime, uint32_t *out);
 
 /*
  The id of the material type named `name`.
@@ -992,7 +992,7 @@ glint_status glint_material_type_count(const struct glint_runtime *runtime, uint
  # Safety
  `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
  */
-glint_status glint_material_type_find(const struct glint_runtime *runtime, const char *name, uint32_t *out);
+glint_status glint_material_type_find(const glint_runtime *runtime, const char *name, uint32_t *out);
 
 /*
  Describe material type `id`. The strings live as long as the runtime.
@@ -1000,7 +1000,7 @@ glint_status glint_material_type_find(const struct glint_runtime *runtime, const
  # Safety
  `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
  */
-glint_status glint_material_type_info(const struct glint_runtime *runtime, uint32_t id, struct glint_material_info *out);
+glint_status glint_material_type_info(const glint_runtime *runtime, uint32_t id, struct glint_material_info *out);
 
 /*
  Describe parameter `index` of material type `id` (as `glint_lobe_param_info`).
@@ -1008,7 +1008,7 @@ glint_status glint_material_type_info(const struct glint_runtime *runtime, uint3
  # Safety
  `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
  */
-glint_status glint_material_param_info(const struct glint_runtime *runtime, uint32_t id, uint32_t index, struct glint_param_info *out);
+glint_status glint_material_param_info(const glint_runtime *runtime, uint32_t id, uint32_t index, struct glint_param_info *out);
 
 /*
  The index of the parameter named `name` of material type `id`, or an element's
@@ -1017,7 +1017,7 @@ glint_status glint_material_param_info(const struct glint_runtime *runtime, uint
  # Safety
  `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
  */
-glint_status glint_material_param_find(const struct glint_runtime *runtime, uint32_t id, const char *name, uint32_t *out);
+glint_status glint_material_param_find(const glint_runtime *runtime, uint32_t id, const char *name, uint32_t *out);
 
 /*
  Compile a material from its JSON description, `{"material": "disney",
@@ -1028,7 +1028,7 @@ glint_status glint_material_param_find(const struct glint_runtime *runtime, uint
  # Safety
  `runtime` is NULL or live; `json_text` NULL or NUL-terminated; `out` NULL or writable.
  */
-glint_status glint_material_create(const struct glint_runtime *runtime, const char *json_text, struct glint_material **out);
+glint_status glint_material_create(const glint_runtime *runtime, const char *json_text, glint_material **out);
 
 /*
  Compile material type `type_id` with `params`, its whole parameter block
@@ -1038,7 +1038,7 @@ glint_status glint_material_create(const struct glint_runtime *runtime, const ch
  # Safety
  `runtime` is NULL or live; `params` NULL or `param_count` floats; `out` NULL or writable.
  */
-glint_status glint_material_create_from_params(const struct glint_runtime *runtime, uint32_t type_id, const float *params, size_t param_count, struct glint_material **out);
+glint_status glint_material_create_from_params(const glint_runtime *runtime, uint32_t type_id, const float *params, size_t param_count, glint_material **out);
 
 /*
  Destroy a material (NULL is ignored). Closures built from it stay valid. A call
@@ -1048,7 +1048,7 @@ glint_status glint_material_create_from_params(const struct glint_runtime *runti
  # Safety
  `material` is NULL or a handle from a material constructor.
  */
-void glint_material_destroy(struct glint_material *material);
+void glint_material_destroy(glint_material *material);
 
 /*
  Build (and finish) the closure of one shading point of `material` in `arena`:
@@ -1063,7 +1063,7 @@ void glint_material_destroy(struct glint_material *material);
  Handles are NULL or live; `context` NULL or readable; `overrides` NULL or valid
  for `override_count` entries; `out` NULL or writable.
  */
-glint_status glint_material_closure(const struct glint_material *material, struct glint_arena *arena, const struct glint_shading_context *context, const struct glint_override *overrides, size_t override_count, struct glint_closure **out);
+glint_status glint_material_closure(const glint_material *material, glint_arena *arena, const struct glint_shading_context *context, const struct glint_override *overrides, size_t override_count, glint_closure **out);
 
 /*
  The library version as `MAJOR * 10000 + MINOR * 100 + PATCH`.
@@ -1093,7 +1093,7 @@ const char *glint_last_error(void);
  # Safety
  `config` is NULL or a NUL-terminated string; `out` is valid for writes.
  */
-glint_status glint_runtime_create(const char *config, struct glint_runtime **out);
+glint_status glint_runtime_create(const char *config, glint_runtime **out);
 
 /*
  Destroy a runtime (NULL is ignored). Arenas and closures made with it must not be
@@ -1108,7 +1108,7 @@ glint_status glint_runtime_create(const char *config, struct glint_runtime **out
  # Safety
  `runtime` is NULL or a handle from `glint_runtime_create`.
  */
-void glint_runtime_destroy(struct glint_runtime *runtime);
+void glint_runtime_destroy(glint_runtime *runtime);
 
 /*
  The kernel set batch calls on this runtime's closures use: `"scalar"`, `"avx2"`
@@ -1117,7 +1117,7 @@ void glint_runtime_destroy(struct glint_runtime *runtime);
  # Safety
  `runtime` is NULL or valid; `out` is NULL or writable.
  */
-glint_status glint_runtime_isa(const struct glint_runtime *runtime, const char **out);
+glint_status glint_runtime_isa(const glint_runtime *runtime, const char **out);
 
 /*
  Load the plugin shared library at `path` (built against `glint_plugin.h`) and
@@ -1130,7 +1130,7 @@ glint_status glint_runtime_isa(const struct glint_runtime *runtime, const char *
  `runtime` is NULL or valid and not in use by another thread; `path` NULL or
  NUL-terminated.
  */
-glint_status glint_runtime_load_plugin(struct glint_runtime *runtime, const char *path);
+glint_status glint_runtime_load_plugin(glint_runtime *runtime, const char *path);
 
 /*
  How many outputs of lobe type `type_id` were zeroed because they were NaN,
@@ -1140,7 +1140,7 @@ glint_status glint_runtime_load_plugin(struct glint_runtime *runtime, const char
  # Safety
  `runtime` is NULL or valid; `out` is NULL or writable.
  */
-glint_status glint_lobe_sanitized_count(const struct glint_runtime *runtime, uint32_t type_id, uint64_t *out);
+glint_status glint_lobe_sanitized_count(const glint_runtime *runtime, uint32_t type_id, uint64_t *out);
 
 /*
  Number of registered lobe types; their ids are `0 .. count - 1`.
@@ -1148,7 +1148,7 @@ glint_status glint_lobe_sanitized_count(const struct glint_runtime *runtime, uin
  # Safety
  `runtime` is NULL or valid; `out` is NULL or writable.
  */
-glint_status glint_lobe_type_count(const struct glint_runtime *runtime, uint32_t *out);
+glint_status glint_lobe_type_count(const glint_runtime *runtime, uint32_t *out);
 
 /*
  The id of the lobe type named `name`.
@@ -1156,7 +1156,7 @@ glint_status glint_lobe_type_count(const struct glint_runtime *runtime, uint32_t
  # Safety
  `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
  */
-glint_status glint_lobe_type_find(const struct glint_runtime *runtime, const char *name, uint32_t *out);
+glint_status glint_lobe_type_find(const glint_runtime *runtime, const char *name, uint32_t *out);
 
 /*
  Describe lobe type `id`. The strings live as long as the runtime.
@@ -1166,7 +1166,7 @@ glint_status glint_lobe_type_find(const struct glint_runtime *runtime, const cha
  # Safety
  `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
  */
-glint_status glint_lobe_type_info(const struct glint_runtime *runtime, uint32_t id, struct glint_lobe_info *out);
+glint_status glint_lobe_type_info(const glint_runtime *runtime, uint32_t id, struct glint_lobe_info *out);
 
 /*
  Describe entry `index` of lobe type `id`'s schema (entries in order: a group or
@@ -1176,7 +1176,7 @@ glint_status glint_lobe_type_info(const struct glint_runtime *runtime, uint32_t 
  # Safety
  `runtime` is NULL or valid; `out` is NULL or a writable struct with `struct_size` set.
  */
-glint_status glint_lobe_param_info(const struct glint_runtime *runtime, uint32_t id, uint32_t index, struct glint_param_info *out);
+glint_status glint_lobe_param_info(const glint_runtime *runtime, uint32_t id, uint32_t index, struct glint_param_info *out);
 
 /*
  The index of the parameter named `name` (its full name, e.g. `coat.roughness`) of
@@ -1186,7 +1186,7 @@ glint_status glint_lobe_param_info(const struct glint_runtime *runtime, uint32_t
  # Safety
  `runtime` is NULL or valid; `name` NULL or NUL-terminated; `out` NULL or writable.
  */
-glint_status glint_lobe_param_find(const struct glint_runtime *runtime, uint32_t id, const char *name, uint32_t *out);
+glint_status glint_lobe_param_find(const glint_runtime *runtime, uint32_t id, const char *name, uint32_t *out);
 
 /*
  The index of choice `choice` of enum parameter `index` of lobe type `id`, as a
@@ -1195,7 +1195,7 @@ glint_status glint_lobe_param_find(const struct glint_runtime *runtime, uint32_t
  # Safety
  `runtime` is NULL or valid; `choice` NULL or NUL-terminated; `out` NULL or writable.
  */
-glint_status glint_lobe_param_choice(const struct glint_runtime *runtime, uint32_t id, uint32_t index, const char *choice, float *out);
+glint_status glint_lobe_param_choice(const glint_runtime *runtime, uint32_t id, uint32_t index, const char *choice, float *out);
 
 /*
  Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
@@ -1205,7 +1205,7 @@ glint_status glint_lobe_param_choice(const struct glint_runtime *runtime, uint32
  # Safety
  `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.
  */
-glint_status glint_lobe_param_defaults(const struct glint_runtime *runtime, uint32_t id, float *out, size_t capacity);
+glint_status glint_lobe_param_defaults(const glint_runtime *runtime, uint32_t id, float *out, size_t capacity);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -6,7 +6,8 @@ set -euo pipefail
 # binutils: nm for tests/simd_inlining.rs.
 # libembree-dev, libopenimageio-dev, libassimp-dev, libcjson-dev: the example hosts
 # (Embree 3 geometry, EXR/PNG output, meshes and scene files).
-packages=(cmake pkg-config gcc g++ make binutils libcmocka-dev
+# valgrind: the *_valgrind ctests (reads of the uninstrumented Rust library).
+packages=(cmake pkg-config gcc g++ make binutils libcmocka-dev valgrind
           libembree-dev libopenimageio-dev libassimp-dev libcjson-dev)
 missing=()
 for p in "${packages[@]}"; do

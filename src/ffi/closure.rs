@@ -8,20 +8,24 @@ use crate::math::{Frame, Vec3};
 
 /// An arena of closures owned by the caller; one thread at a time. A small shell
 /// (see `handle`) around its slots.
+#[repr(C)]
 pub struct glint_arena {
     tag: Tag,
     /// Bumped by every reset; closure handles carry the one they were built in.
     generation: u16,
     arena: Arena<glint_closure>,
 }
+const _: () = assert!(std::mem::offset_of!(glint_arena, tag) == 0);
 
 /// A closure: built inside an arena, immutable and thread-safe once finished.
+#[repr(C)]
 pub struct glint_closure {
     /// `closure_tag(generation)` while live, then poisoned by reset or destroy.
     tag: Tag,
     pub(crate) closure: Closure,
     runtime: *const glint_runtime,
 }
+const _: () = assert!(std::mem::offset_of!(glint_closure, tag) == 0);
 
 impl glint_closure {
     /// The runtime the closure was built with, if it was not destroyed; a separate
@@ -75,7 +79,7 @@ unsafe fn closure_handle_mut<'a>(p: *mut glint_closure) -> Result<&'a mut glint_
 /// `p` is NULL or a handle from `glint_arena_create` (see `glint_arena_destroy`).
 unsafe fn arena_mut<'a>(p: *mut glint_arena) -> Result<&'a mut glint_arena, Error> {
     // SAFETY: forwarded contract; destroyed shells stay readable while quarantined.
-    let a = unsafe { deref_mut(p, "arena") }?;
+    let a = unsafe { deref_mut(shell_mut(p), "arena") }?;
     check_tag(&a.tag, ARENA_LIVE, ARENA_DEAD, "arena")?;
     Ok(a)
 }
@@ -260,6 +264,7 @@ pub unsafe extern "C" fn glint_arena_reset(arena: *mut glint_arena) -> glint_sta
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_arena_destroy(arena: *mut glint_arena) {
     guard(|| {
+        let arena = shell_mut(arena);
         if arena.is_null() {
             return Ok(());
         }
@@ -307,7 +312,7 @@ unsafe fn constructor_args<'a>(
     // SAFETY: per the contract.
     let out = unsafe { out_value(out, "out", std::ptr::null_mut()) }?;
     // SAFETY: per the contract.
-    let runtime = unsafe { deref(runtime, "runtime") }?;
+    let runtime = unsafe { deref(shell(runtime), "runtime") }?;
     runtime.live()?;
     // SAFETY: per the contract.
     let arena = unsafe { arena_mut(arena) }?;

@@ -12,6 +12,11 @@
 //!   matches, even when its slot holds a newer closure. Each closure call also checks
 //!   its runtime's tag.
 //!
+//! - Every handle type is `#[repr(C)]` with its tag first (asserted beside each), and
+//!   every handle is masked to its address ([`shell`], [`decode`]), so a handle of one
+//!   kind passed as another reads its tag in bounds and is refused; the header declares
+//!   them opaque (cbindgen.toml).
+//!
 //! What stays undefined: pointers this library never returned; a destroyed runtime or
 //! arena handle used after [`GLINT_QUARANTINE_SHELLS`] more runtimes and arenas were
 //! destroyed (its shell is then freed); closures of a destroyed arena whose slots
@@ -118,6 +123,20 @@ pub(crate) fn encode<T>(slot: *mut T, generation: u16) -> Result<*mut T, Error> 
 pub(crate) fn decode<T>(handle: *const T) -> (*const T, u16) {
     let generation = (handle.addr() >> GENERATION_SHIFT) as u16;
     (handle.map_addr(|a| a & ADDRESS_MASK), generation)
+}
+
+/// The shell a runtime, arena or material handle points to. Their addresses never have
+/// the high 16 bits set; clearing them as for a closure handle makes a closure handle
+/// passed in their place read its slot's tag (and be refused) instead of faulting.
+#[inline(always)]
+pub(crate) fn shell<T>(handle: *const T) -> *const T {
+    handle.map_addr(|a| a & ADDRESS_MASK)
+}
+
+/// [`shell`] for a mutable handle.
+#[inline(always)]
+pub(crate) fn shell_mut<T>(handle: *mut T) -> *mut T {
+    handle.map_addr(|a| a & ADDRESS_MASK)
 }
 
 /// Check a closure slot's tag against the generation of the handle that led to it.

@@ -13,12 +13,14 @@ pub(crate) const MATERIAL_DEAD: u64 = u64::from_be_bytes(*b"GLMTDEAD");
 /// A compiled material: a material type with its parameters validated and resolved
 /// once (`glint_material_create`). Immutable and thread-safe; a small shell (see
 /// `handle`) around the material.
+#[repr(C)]
 pub struct glint_material {
     tag: Tag,
     runtime: *const glint_runtime,
     /// `None` once destroyed.
     material: Option<Material>,
 }
+const _: () = assert!(std::mem::offset_of!(glint_material, tag) == 0);
 
 /// A live material and its live runtime.
 ///
@@ -28,7 +30,7 @@ pub(crate) unsafe fn material_ref<'a>(
     p: *const glint_material,
 ) -> Result<(&'a Material, &'a glint_runtime), Error> {
     // SAFETY: forwarded contract; destroyed shells stay readable while quarantined.
-    let m = unsafe { deref(p, "material") }?;
+    let m = unsafe { deref(shell(p), "material") }?;
     check_tag(&m.tag, MATERIAL_LIVE, MATERIAL_DEAD, "material")?;
     // SAFETY: the runtime was live when the material was made, and a destroyed
     // runtime's shell stays readable while quarantined.
@@ -396,7 +398,7 @@ pub unsafe extern "C" fn glint_material_create(
         // SAFETY: per the contract.
         let out = unsafe { out_value(out, "out", std::ptr::null_mut()) }?;
         // SAFETY: per the contract.
-        let shell = unsafe { deref(runtime, "runtime") }?;
+        let shell = unsafe { deref(shell(runtime), "runtime") }?;
         let rt = &shell.live()?.runtime;
         // SAFETY: per the contract.
         let text = unsafe { c_str(json_text, "json_text") }?;
@@ -423,7 +425,7 @@ pub unsafe extern "C" fn glint_material_create_from_params(
         // SAFETY: per the contract.
         let out = unsafe { out_value(out, "out", std::ptr::null_mut()) }?;
         // SAFETY: per the contract.
-        let shell = unsafe { deref(runtime, "runtime") }?;
+        let shell = unsafe { deref(shell(runtime), "runtime") }?;
         let rt = &shell.live()?.runtime;
         let params = match (params.is_null(), param_count) {
             (true, 0) => None,
@@ -445,6 +447,7 @@ pub unsafe extern "C" fn glint_material_create_from_params(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_material_destroy(material: *mut glint_material) {
     guard(|| {
+        let material = shell_mut(material);
         if material.is_null() {
             return Ok(());
         }

@@ -24,11 +24,13 @@ fn c_string(s: &str) -> CString {
 }
 
 /// The runtime handle: a small shell (see `handle`) around what the runtime owns.
+#[repr(C)]
 pub struct glint_runtime {
     tag: Tag,
     /// `None` once destroyed.
     live: Option<Box<LiveRuntime>>,
 }
+const _: () = assert!(std::mem::offset_of!(glint_runtime, tag) == 0);
 
 /// What a live runtime owns: the registry and settings. Read-only after setup.
 pub(crate) struct LiveRuntime {
@@ -237,7 +239,7 @@ fn destroyed() -> Error {
 /// `glint_runtime_destroy`.
 pub(crate) unsafe fn runtime_ref<'a>(p: *const glint_runtime) -> Result<&'a LiveRuntime, Error> {
     // SAFETY: forwarded contract; destroyed shells stay readable while quarantined.
-    unsafe { deref(p, "runtime") }?.live()
+    unsafe { deref(shell(p), "runtime") }?.live()
 }
 
 /// Description of a lobe type.
@@ -426,6 +428,7 @@ pub unsafe extern "C" fn glint_runtime_create(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_runtime_destroy(runtime: *mut glint_runtime) {
     guard(|| {
+        let runtime = shell_mut(runtime);
         if runtime.is_null() {
             return Ok(());
         }
@@ -481,7 +484,7 @@ pub unsafe extern "C" fn glint_runtime_load_plugin(
 ) -> glint_status {
     guard(|| {
         // SAFETY: per the contract.
-        let rt = unsafe { deref_mut(runtime, "runtime") }?.live_mut()?;
+        let rt = unsafe { deref_mut(shell_mut(runtime), "runtime") }?.live_mut()?;
         // SAFETY: per the contract.
         let path = unsafe { c_str(path, "path") }?;
         rt.runtime.load_plugin(std::path::Path::new(path))?;
