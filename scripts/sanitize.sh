@@ -46,9 +46,10 @@ if [ "$mode" = valgrind ] || [ "$mode" = all ]; then
     # Not under valgrind: package_consumers (a CMake build of an outside project) and
     # plugin_guide_example (a CMake script comparing the guide with minimal.c) run no
     # Glint code of their own; the example hosts' ctest renders (hours under valgrind)
-    # are replaced by the small renders of the hosts mode.
+    # are replaced by the small renders of the hosts mode; the *_valgrind tests run
+    # valgrind themselves.
     ctest --test-dir build-memcheck -T memcheck --output-on-failure --timeout 3000 \
-          -E '^(package_consumers|plugin_guide_example|pathtracer_.*|scanline_.*)$' \
+          -E '^(package_consumers|plugin_guide_example|pathtracer_.*|scanline_.*|.*_valgrind)$' \
           --overwrite MemoryCheckCommand="$(command -v valgrind)" \
           --overwrite "MemoryCheckCommandOptions=${memcheck_options[*]}" \
         || status=1
