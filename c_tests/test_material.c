@@ -555,6 +555,20 @@ static void huge_material_batch_counts_are_refused(void **state)
         check_error(fx, glint_material_albedo_batch(&a), GLINT_ERROR_OUT_OF_RANGE);
         assert_error_mentions("count");
     }
+    /* So are override counts beyond a material's 64 parameter values, before any
+     * override past the two given is read. */
+    l.count = N;
+    for (k = 0; k < 3; k++) {
+        glint_material_albedo_batch_args a;
+        const size_t override_counts[] = {65, (size_t)1 << 40, SIZE_MAX};
+        memset(&a, 0, sizeof a);
+        a.struct_size = sizeof a;
+        l.override_count = override_counts[k];
+        a.lanes = l;
+        a.albedo_r = out[0], a.albedo_g = out[1], a.albedo_b = out[2];
+        check_error(fx, glint_material_albedo_batch(&a), GLINT_ERROR_OUT_OF_RANGE);
+        assert_error_mentions("override_count");
+    }
     for (i = 0; i < 10; i++) {
         int j;
         for (j = 0; j < N; j++)

@@ -309,7 +309,7 @@ typedef struct glint_material_lanes {
   const float *tangent_y;
   const float *tangent_z;
   /*
-   `override_count` entries, or NULL with `override_count == 0`.
+   `override_count` entries (at most 64), or NULL with `override_count == 0`.
    */
   const struct glint_override_lanes *overrides;
   size_t override_count;
@@ -1052,8 +1052,8 @@ void glint_material_destroy(glint_material *material);
 
 /*
  Build (and finish) the closure of one shading point of `material` in `arena`:
- `overrides` (NULL with `override_count == 0` for none) set textured parameters
- for this point; the material expands into weighted lobes in the context's frame,
+ `overrides` (NULL with `override_count == 0` for none; at most 64) set textured
+ parameters for this point; the material expands into weighted lobes in the context's frame,
  drops those whose `luminance(weight * albedo(wo))` (by each lobe's albedo
  estimate, README "Pruning") is below the runtime's `prune=` threshold, and fixes
  lobe selection from the rest. The context and overrides are

@@ -509,7 +509,7 @@ pub struct glint_material_lanes {
     pub tangent_x: *const f32,
     pub tangent_y: *const f32,
     pub tangent_z: *const f32,
-    /// `override_count` entries, or NULL with `override_count == 0`.
+    /// `override_count` entries (at most 64), or NULL with `override_count == 0`.
     pub overrides: *const glint_override_lanes,
     pub override_count: usize,
 }
@@ -625,22 +625,20 @@ unsafe fn material_lanes<'a>(
         } else {
             Some(soa_in(l.tangent_x, l.tangent_y, l.tangent_z, n, "tangent")?)
         };
-        if l.override_count > 0 {
-            let given = input(l.overrides, l.override_count, "overrides")?;
-            for (i, o) in given.iter().enumerate() {
-                let kind = super::material::param_kind(o.param_type, i)?;
-                // The schema first: a wrong index or type names itself, not its arrays.
-                material.override_spec(i, o.param, kind)?;
-                let mut value: [&[f32]; 3] = [&[]; 3];
-                for (c, v) in value.iter_mut().enumerate().take(kind.size()) {
-                    *v = input(o.value[c], n, format_args!("overrides[{i}].value[{c}]"))?;
-                }
-                overrides.push(batch::material::OverrideLanes {
-                    param: o.param,
-                    kind,
-                    value,
-                });
+        let given = super::material::overrides_in(l.overrides, l.override_count)?;
+        for (i, o) in given.iter().enumerate() {
+            let kind = super::material::param_kind(o.param_type, i)?;
+            // The schema first: a wrong index or type names itself, not its arrays.
+            material.override_spec(i, o.param, kind)?;
+            let mut value: [&[f32]; 3] = [&[]; 3];
+            for (c, v) in value.iter_mut().enumerate().take(kind.size()) {
+                *v = input(o.value[c], n, format_args!("overrides[{i}].value[{c}]"))?;
             }
+            overrides.push(batch::material::OverrideLanes {
+                param: o.param,
+                kind,
+                value,
+            });
         }
         let exec = runtime.live()?.runtime.exec();
         Ok((

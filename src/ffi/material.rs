@@ -213,6 +213,34 @@ pub(crate) fn shading_context(
     Ok(())
 }
 
+/// The caller's `count` overrides (scalar or per lane): none for 0, else at most one
+/// per parameter value, so a wild count is refused before any entry past the real
+/// ones is read.
+///
+/// # Safety
+/// `overrides` is NULL or valid for `count` entries.
+pub(crate) unsafe fn overrides_in<'a, T>(
+    overrides: *const T,
+    count: usize,
+) -> Result<&'a [T], Error> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    if overrides.is_null() {
+        return Err(null("overrides (with override_count > 0)"));
+    }
+    if count > MAX_MATERIAL_PARAMS {
+        return Err(Error::new(
+            Status::OutOfRange,
+            format!(
+                "override_count {count}: a material has at most {MAX_MATERIAL_PARAMS} parameter values"
+            ),
+        ));
+    }
+    // SAFETY: non-NULL and `count` (at most 64) entries per the contract.
+    Ok(unsafe { std::slice::from_raw_parts(overrides, count) })
+}
+
 /// The caller's overrides applied to `block`, a copy of the material's values.
 ///
 /// # Safety
@@ -223,22 +251,8 @@ pub(crate) unsafe fn apply_overrides(
     count: usize,
     block: &mut [f32],
 ) -> Result<(), Error> {
-    if count == 0 {
-        return Ok(());
-    }
-    if overrides.is_null() {
-        return Err(null("overrides (with override_count > 0)"));
-    }
-    if count > MAX_MATERIAL_PARAMS {
-        return Err(Error::new(
-            Status::OutOfRange,
-            format!(
-                "override_count {count}: a material has at most {MAX_MATERIAL_PARAMS} parameters"
-            ),
-        ));
-    }
-    // SAFETY: non-NULL and `count` entries per the contract.
-    let given = unsafe { std::slice::from_raw_parts(overrides, count) };
+    // SAFETY: forwarded contract.
+    let given = unsafe { overrides_in(overrides, count) }?;
     for (i, o) in given.iter().enumerate() {
         let o = Override {
             param: o.param,
@@ -463,8 +477,8 @@ pub unsafe extern "C" fn glint_material_destroy(material: *mut glint_material) {
 }
 
 /// Build (and finish) the closure of one shading point of `material` in `arena`:
-/// `overrides` (NULL with `override_count == 0` for none) set textured parameters
-/// for this point; the material expands into weighted lobes in the context's frame,
+/// `overrides` (NULL with `override_count == 0` for none; at most 64) set textured
+/// parameters for this point; the material expands into weighted lobes in the context's frame,
 /// drops those whose `luminance(weight * albedo(wo))` (by each lobe's albedo
 /// estimate, README "Pruning") is below the runtime's `prune=` threshold, and fixes
 /// lobe selection from the rest. The context and overrides are
