@@ -1070,6 +1070,26 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     })
 }
 
+/// Most rows a mixture sample unsorts: `wi`, pdf, weight, value, eta, roughness,
+/// flags, lobe and component.
+const UNSORT_ROWS: usize = 15;
+
+/// Rows unsorted by one call, each with its destination.
+#[derive(Default)]
+struct RowPairs<'a> {
+    src: [&'a [f32]; UNSORT_ROWS],
+    dst: [&'a mut [f32]; UNSORT_ROWS],
+    len: usize,
+}
+
+impl<'a> RowPairs<'a> {
+    fn push(&mut self, src: &'a [f32], dst: &'a mut [f32]) {
+        self.src[self.len] = src;
+        self.dst[self.len] = dst;
+        self.len += 1;
+    }
+}
+
 /// Sample lanes `lanes` of a shared closure of several lobes. The lanes are grouped
 /// by the lobe they chose (lobe choice in a kernel, runs counted, then each lobe's
 /// lanes packed into its run by `compress`) and their inputs moved once in that order, so each lobe samples its own run of rows and
@@ -1248,43 +1268,67 @@ fn mixture_in_place(
     let local = lanes.start - base..lanes.end - base;
     let (chosen, starts) = (&s.chosen[..n], &starts[..=count]);
     let sorted = len + MAX_LANES;
-    let [wx, wy, wz] = rows_mut(&mut out.wi, &local);
-    let [gr, gg, gb] = rows_mut(&mut out.weight, &local);
-    let [cx, cy, cz] = view3(&c.wi, sorted);
-    let [cr, cg, cb] = view3(&c.weight, sorted);
-    unsort_rows(
-        kernels,
-        chosen,
-        starts,
-        &[cx, cy, cz, &c.pdf[..sorted], cr, cg, cb],
-        &mut [wx, wy, wz, &mut out.pdf[local.clone()], gr, gg, gb],
-    );
-    if let Some(v) = out.value.as_mut() {
-        let src = view3(&c.value, sorted);
-        unsort_rows(kernels, chosen, starts, &src, &mut rows_mut(v, &local));
-    }
-    for (src, dst) in [
-        (&c.eta, out.eta.as_deref_mut()),
-        (&c.roughness, out.roughness.as_deref_mut()),
-    ] {
-        if let Some(dst) = dst {
-            let dst = &mut dst[local.clone()];
-            unsort_rows(kernels, chosen, starts, &[&src[..sorted]], &mut [dst]);
-        }
-    }
-    for (src, dst) in [
+    // Integer rows go back as the bits of float rows (moves and blends keep any
+    // bits), and every requested row in one unsort: each call finds each register's
+    // lanes' lobes again.
+    let words = [
         (&s.flags, out.flags.as_deref_mut()),
         (&s.lobe_index, out.lobe.as_deref_mut()),
         (&s.component, out.component.as_deref_mut()),
-    ] {
+    ];
+    let mut words_out: [Option<&mut [u32]>; 3] = Default::default();
+    for (((src, dst), bits), o) in words.into_iter().zip(&mut c.bits).zip(&mut words_out) {
         if let Some(dst) = dst {
-            // Each lane takes the next row of its lobe's run, as `unsort_rows` does.
-            let mut next = [0usize; MAX_LOBES];
-            next[..count].copy_from_slice(&starts[..count]);
-            for (d, &k) in dst[local.clone()].iter_mut().zip(chosen) {
-                let at = &mut next[k as usize];
-                *d = src[*at];
-                *at += 1;
+            for (b, &w) in grow(bits, sorted).iter_mut().zip(&src[..len]) {
+                *b = f32::from_bits(w);
+            }
+            *o = Some(&mut dst[local.clone()]);
+        }
+    }
+    {
+        let mut rows = RowPairs::default();
+        for (src, dst) in view3(&c.wi, sorted)
+            .into_iter()
+            .zip(rows_mut(&mut out.wi, &local))
+        {
+            rows.push(src, dst);
+        }
+        rows.push(&c.pdf[..sorted], &mut out.pdf[local.clone()]);
+        let weight = rows_mut(&mut out.weight, &local);
+        for (src, dst) in view3(&c.weight, sorted).into_iter().zip(weight) {
+            rows.push(src, dst);
+        }
+        if let Some(v) = out.value.as_mut() {
+            for (src, dst) in view3(&c.value, sorted).into_iter().zip(rows_mut(v, &local)) {
+                rows.push(src, dst);
+            }
+        }
+        for (src, dst) in [
+            (&c.eta, out.eta.as_deref_mut()),
+            (&c.roughness, out.roughness.as_deref_mut()),
+        ] {
+            if let Some(dst) = dst {
+                rows.push(&src[..sorted], &mut dst[local.clone()]);
+            }
+        }
+        let unsorted = rows3(&mut c.unsorted, n);
+        for ((bits, o), dst) in c.bits.iter().zip(&words_out).zip(unsorted) {
+            if o.is_some() {
+                rows.push(&bits[..sorted], dst);
+            }
+        }
+        unsort_rows(
+            kernels,
+            chosen,
+            starts,
+            &rows.src[..rows.len],
+            &mut rows.dst[..rows.len],
+        );
+    }
+    for (o, unsorted) in words_out.iter_mut().zip(&c.unsorted) {
+        if let Some(o) = o {
+            for (d, &b) in o.iter_mut().zip(unsorted) {
+                *d = b.to_bits();
             }
         }
     }

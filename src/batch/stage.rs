@@ -492,6 +492,10 @@ pub(super) struct Compact {
     pub pdf: Vec<f32>,
     pub eta: Vec<f32>,
     pub roughness: Vec<f32>,
+    /// Rows of integers (flags, lobe, component) as the bits of floats, sorted, and
+    /// back in lane order.
+    pub bits: [Vec<f32>; 3],
+    pub unsorted: [Vec<f32>; 3],
 }
 
 impl Scratch {
@@ -510,6 +514,8 @@ impl Scratch {
             &mut self.compact.wi,
             &mut self.compact.weight,
             &mut self.compact.value,
+            &mut self.compact.bits,
+            &mut self.compact.unsorted,
         ] {
             for row in rows {
                 reserve(row, len)?;
