@@ -372,6 +372,20 @@ static void failing_calls_zero_their_outputs(void **state)
                 GLINT_ERROR_OUT_OF_RANGE);
     for (int i = 0; i < 4; i++)
         assert_true(defaults[i] == 0.0f);
+    /* A wild capacity is not written through: no block is longer than
+     * GLINT_MAX_PARAM_VALUES floats, and a failure zeroes no more. */
+    {
+        float big[GLINT_MAX_PARAM_VALUES + 64];
+        const size_t n = sizeof big / sizeof big[0];
+        fill_floats(big, n, GARBAGE);
+        check_error(fx, glint_lobe_param_defaults(fx->rt, 9999, big, SIZE_MAX),
+                    GLINT_ERROR_OUT_OF_RANGE);
+        for (size_t i = 0; i < n; i++)
+            assert_true(big[i] == (i < GLINT_MAX_PARAM_VALUES ? 0.0f : GARBAGE));
+        fill_floats(big, n, GARBAGE);
+        assert_ok(glint_lobe_param_defaults(fx->rt, 0, big, SIZE_MAX));
+        assert_true(big[n - 1] == GARBAGE);
+    }
 }
 
 /* ---- D14: glint_closure_lobe on an unfinished closure -------------------------------- */

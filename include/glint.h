@@ -61,6 +61,12 @@ typedef struct glint_material glint_material;
 #define GLINT_MAX_LOBES 16
 
 /*
+ Most parameter values (floats) in one lobe's block, and in all lobes of one
+ closure together.
+ */
+#define GLINT_MAX_PARAM_VALUES 512
+
+/*
  Sample and lobe-type flags.
  */
 #define GLINT_FLAG_REFLECTION 1
@@ -1200,7 +1206,8 @@ glint_status glint_lobe_param_choice(const glint_runtime *runtime, uint32_t id, 
 /*
  Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
  `capacity` (floats available at `out`) must be at least its `param_block_size`.
- On failure all of `out[0 .. capacity)` is zeroed.
+ On failure `out[0 .. min(capacity, GLINT_MAX_PARAM_VALUES))` is zeroed: no block is
+ longer, and a wild capacity (bytes for floats, `SIZE_MAX`) is not written through.
 
  # Safety
  `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.

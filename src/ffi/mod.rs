@@ -76,6 +76,11 @@ pub const GLINT_QUARANTINE_BYTES: usize = 16 << 20;
 /// Most lobes in one closure.
 pub const GLINT_MAX_LOBES: u32 = 16;
 
+/// Most parameter values (floats) in one lobe's block, and in all lobes of one
+/// closure together.
+pub const GLINT_MAX_PARAM_VALUES: u32 = 512;
+const _: () = assert!(GLINT_MAX_PARAM_VALUES as usize == crate::closure::MAX_PARAM_VALUES);
+
 /// Sample and lobe-type flags.
 pub const GLINT_FLAG_REFLECTION: u32 = 1;
 pub const GLINT_FLAG_TRANSMISSION: u32 = 2;

@@ -683,7 +683,8 @@ pub unsafe extern "C" fn glint_lobe_param_choice(
 
 /// Write the default parameter block of lobe type `id` to `out[0 .. param_block_size)`;
 /// `capacity` (floats available at `out`) must be at least its `param_block_size`.
-/// On failure all of `out[0 .. capacity)` is zeroed.
+/// On failure `out[0 .. min(capacity, GLINT_MAX_PARAM_VALUES))` is zeroed: no block is
+/// longer, and a wild capacity (bytes for floats, `SIZE_MAX`) is not written through.
 ///
 /// # Safety
 /// `runtime` is NULL or valid; `out` NULL or valid for `capacity` floats.
@@ -698,8 +699,11 @@ pub unsafe extern "C" fn glint_lobe_param_defaults(
         if out.is_null() {
             return Err(null("out"));
         }
-        // SAFETY: non-NULL and valid for `capacity` floats per the contract.
-        let out = unsafe { std::slice::from_raw_parts_mut(out, capacity) };
+        // SAFETY: non-NULL and valid for `capacity` floats per the contract; no more
+        // are used.
+        let out = unsafe {
+            std::slice::from_raw_parts_mut(out, capacity.min(GLINT_MAX_PARAM_VALUES as usize))
+        };
         // Success writes only the block; failure zeroes all of `out`.
         let defaults = |out: &mut [f32]| {
             // SAFETY: per the contract.
