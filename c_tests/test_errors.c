@@ -129,6 +129,10 @@ static void add_lobe_argument_errors(void **state)
     check_error(fx, glint_closure_add_lobe(c, lambert, WHITE, &f, NULL, li.param_block_size, NULL),
                 GLINT_ERROR_NULL_POINTER);
     assert_error_mentions("params");
+    /* A count longer than any block is refused as such (no slice of SIZE_MAX floats). */
+    check_error(fx, glint_closure_add_lobe(c, lambert, WHITE, &f, WHITE, SIZE_MAX, NULL),
+                GLINT_ERROR_INVALID_ARGUMENT);
+    assert_error_mentions("param_count");
 
     /* Bad frames. */
     f.normal = nan_vec();

@@ -145,6 +145,9 @@ static void creation_errors(void **state)
                 GLINT_ERROR_INVALID_ARGUMENT);
     check_error(fx, glint_material_create_from_params(fx->rt, disney_id(fx), NULL, 13, &m),
                 GLINT_ERROR_NULL_POINTER);
+    check_error(fx, glint_material_create_from_params(fx->rt, disney_id(fx), params, SIZE_MAX, &m),
+                GLINT_ERROR_INVALID_ARGUMENT);
+    assert_error_mentions("param_count");
     bad[5] = NAN;
     check_error(fx, glint_material_create_from_params(fx->rt, disney_id(fx), bad, 13, &m),
                 GLINT_ERROR_INVALID_ARGUMENT);

@@ -471,12 +471,8 @@ pub unsafe extern "C" fn glint_closure_add_lobe(
         } else {
             Some(vec3_in(t, "frame.tangent")?)
         };
-        let params = match (params.is_null(), param_count) {
-            (true, 0) => None,
-            (true, _) => return Err(null("params (with param_count > 0)")),
-            // SAFETY: non-NULL and `param_count` floats per the contract.
-            (false, n) => Some(unsafe { std::slice::from_raw_parts(params, n) }),
-        };
+        // SAFETY: per the contract.
+        let params = unsafe { param_block(params, param_count, GLINT_MAX_PARAM_VALUES as usize) }?;
         let registry = &c.runtime()?.runtime.registry;
         let index =
             c.closure

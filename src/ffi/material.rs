@@ -441,12 +441,8 @@ pub unsafe extern "C" fn glint_material_create_from_params(
         // SAFETY: per the contract.
         let shell = unsafe { deref(shell(runtime), "runtime") }?;
         let rt = &shell.live()?.runtime;
-        let params = match (params.is_null(), param_count) {
-            (true, 0) => None,
-            (true, _) => return Err(null("params (with param_count > 0)")),
-            // SAFETY: non-NULL and `param_count` floats per the contract.
-            (false, n) => Some(unsafe { std::slice::from_raw_parts(params, n) }),
-        };
+        // SAFETY: per the contract.
+        let params = unsafe { param_block(params, param_count, MAX_MATERIAL_PARAMS) }?;
         let material = Material::new(&rt.registry, type_id, params, rt.settings.prune)?;
         place_material(shell, material, out)
     })

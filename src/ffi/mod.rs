@@ -193,6 +193,29 @@ unsafe fn deref_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Error> {
     unsafe { p.as_mut() }.ok_or_else(|| null(what))
 }
 
+/// A parameter block argument of `count` floats: `None` for NULL with `count == 0`;
+/// refused when NULL with a count, or when longer than any block (`max` values), before
+/// a slice is made.
+///
+/// # Safety
+/// `params` is NULL or valid for `count` floats.
+unsafe fn param_block<'a>(
+    params: *const f32,
+    count: usize,
+    max: usize,
+) -> Result<Option<&'a [f32]>, Error> {
+    match (params.is_null(), count) {
+        (true, 0) => Ok(None),
+        (true, _) => Err(null("params (with param_count > 0)")),
+        (false, n) if n > max => Err(Error::new(
+            Status::InvalidArgument,
+            format!("param_count {n}: a parameter block has at most {max} values"),
+        )),
+        // SAFETY: non-NULL and `n` (at most `max`) floats per the contract.
+        (false, n) => Ok(Some(unsafe { std::slice::from_raw_parts(params, n) })),
+    }
+}
+
 /// A NUL-terminated UTF-8 string argument.
 ///
 /// # Safety
