@@ -300,6 +300,30 @@ static void json_closures_take_material_entries(void **state)
                 glint_closure_from_json(fx->rt, fx->arena,
                                         "{\"lobes\": [{\"material\": \"plastic\"}]}", &wo, &whole),
                 GLINT_ERROR_UNKNOWN_NAME);
+    /* A material entry's weight is checked as a lobe's: finite, >= 0 and at most
+     * 1e16 (it scaled the material's lobes unchecked: -1 gave an empty closure,
+     * 1e39 an infinite albedo). */
+    {
+        /* The last: an entry at the bound whose sheen lobe weighs 10 times it (a blue
+         * base color's tint). */
+        const char *bad[] = {"-1", "1e39", "1e17", "[0.5, -0.5, 0.5]",
+                             "1e16, \"base_color\": [0, 0, 1], \"sheen\": 1, "
+                             "\"sheen_tint\": 1"};
+        const glint_status expected[] = {
+            GLINT_ERROR_INVALID_ARGUMENT, GLINT_ERROR_INVALID_ARGUMENT, GLINT_ERROR_OUT_OF_RANGE,
+            GLINT_ERROR_INVALID_ARGUMENT, GLINT_ERROR_OUT_OF_RANGE};
+        size_t i;
+        for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+            char json[192];
+            glint_closure *out = (glint_closure *)fx;
+            snprintf(json, sizeof json,
+                     "{\"lobes\": [{\"material\": \"disney\", \"weight\": %s}]}", bad[i]);
+            check_error(fx, glint_closure_from_json(fx->rt, fx->arena, json, &wo, &out),
+                        expected[i]);
+            assert_error_mentions("weight");
+            assert_null(out);
+        }
+    }
     glint_material_destroy(m);
 }
 

@@ -472,11 +472,20 @@ fn add_material(
     let prefix = index.map_or(String::new(), |i| format!("lobes[{i}] "));
     let at = |key: &str| format!("{prefix}({}).{}", material.kind().name(), quoted(key));
     let (weight, frame) = placement(entry, &at)?;
+    let owner = format!("{prefix}({})", material.kind().name());
+    crate::closure::check_weight(&owner, weight)?;
     let wo = closure.view().unwrap_or(frame.n);
     let ctx = ShadingContext::new(wo, frame);
     let mut shares = [0.0; MAX_LOBES];
     let scale = Rgb::from_array(weight);
+    let before = closure.lobes().len();
     material.emit(closure, &ctx, material.params(), scale, &mut shares)?;
+    // The material's own weights (Disney's sheen tint up to 10) scale the entry's:
+    // its lobes are held to the lobes' bound too.
+    for lobe in &closure.lobes()[before..] {
+        let w = lobe.weight;
+        crate::closure::check_weight(&owner, [w.r, w.g, w.b])?;
+    }
     Ok(())
 }
 

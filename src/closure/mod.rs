@@ -30,6 +30,30 @@ pub const MAX_PARAM_VALUES: usize = 512;
 /// shares stay far from overflow.
 pub const MAX_LOBE_WEIGHT: f32 = 1e16;
 
+/// A lobe's (or a material entry's) RGB weight: finite, >= 0 and at most
+/// [`MAX_LOBE_WEIGHT`] per component.
+pub fn check_weight(owner: &str, weight: [f32; 3]) -> Result<(), Error> {
+    if let Some(i) = weight.iter().position(|w| !w.is_finite() || *w < 0.0) {
+        return Err(Error::new(
+            Status::InvalidArgument,
+            format!(
+                "{owner}: weight[{i}] = {} must be finite and >= 0",
+                weight[i]
+            ),
+        ));
+    }
+    if let Some(i) = weight.iter().position(|w| *w > MAX_LOBE_WEIGHT) {
+        return Err(Error::new(
+            Status::OutOfRange,
+            format!(
+                "{owner}: weight[{i}] = {:e} exceeds the largest lobe weight, {MAX_LOBE_WEIGHT:e}",
+                weight[i]
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// One lobe of a closure; its blocks are ranges of the closure's `values`.
 #[derive(Clone)]
 pub struct LobeInstance {
@@ -215,26 +239,7 @@ impl Closure {
             ));
         }
         let lobe = registry.get(type_id)?;
-        if let Some(i) = weight.iter().position(|w| !w.is_finite() || *w < 0.0) {
-            return Err(Error::new(
-                Status::InvalidArgument,
-                format!(
-                    "{}: weight[{i}] = {} must be finite and >= 0",
-                    lobe.name(),
-                    weight[i]
-                ),
-            ));
-        }
-        if let Some(i) = weight.iter().position(|w| *w > MAX_LOBE_WEIGHT) {
-            return Err(Error::new(
-                Status::OutOfRange,
-                format!(
-                    "{}: weight[{i}] = {:e} exceeds the largest lobe weight, {MAX_LOBE_WEIGHT:e}",
-                    lobe.name(),
-                    weight[i]
-                ),
-            ));
-        }
+        check_weight(lobe.name(), weight)?;
         if let Some(values) = params {
             registry.validate_block(type_id, values)?;
         }
