@@ -536,6 +536,32 @@ static void batch_errors(void **state)
     e.lanes.count = N;
     assert_ok(glint_material_eval_batch(&e));
     check_error(fx, glint_material_eval_batch(NULL), GLINT_ERROR_NULL_POINTER);
+
+    /* Non-finite random numbers fail their lane, as glint_sample and closure sample
+     * batches refuse them (the material batch sampled with them). */
+    {
+        glint_material_sample_batch_args a;
+        float out[7][N];
+        const float bad[] = {NAN, INFINITY, -INFINITY};
+        int k;
+        memset(&a, 0, sizeof a);
+        a.struct_size = sizeof a;
+        a.lanes = l;
+        a.u_lobe = d->u[0], a.u0 = d->u[1], a.u1 = d->u[2];
+        a.wi_x = out[0], a.wi_y = out[1], a.wi_z = out[2], a.pdf = out[3];
+        a.weight_r = out[4], a.weight_g = out[5], a.weight_b = out[6];
+        for (k = 0; k < 3; k++) {
+            float keep = d->u[k][20 + k];
+            d->u[k][20 + k] = bad[k];
+            fill_floats(out[3], N, -1.0f);
+            check_error(fx, glint_material_sample_batch(&a), GLINT_ERROR_INVALID_ARGUMENT);
+            assert_error_mentions("random number");
+            assert_true(out[3][20 + k] == 0.0f && out[4][20 + k] == 0.0f);
+            assert_true(out[3][24] >= 0.0f);
+            d->u[k][20 + k] = keep;
+        }
+        assert_ok(glint_material_sample_batch(&a));
+    }
     free(d);
     glint_material_destroy(m);
 }

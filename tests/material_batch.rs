@@ -272,9 +272,9 @@ type LaneParams = Vec<(&'static str, Vec<Vec<f32>>)>;
 /// those of the closure `Material::closure` builds per lane, on every ISA, for
 /// consecutive lanes and for lanes an active mask scatters, random views, normals,
 /// tangents (every other one automatic) and the per-lane `params`; `u_lobe` NaN or
-/// infinite on lanes 5, 6 and 8 (when there are) clamps into [0, 1) as the batch
-/// documents: NaN and -inf to 0, +inf below 1. Returns each lane's closure's lobe
-/// count and whether its albedo's luminance is below `prune`.
+/// infinite on lanes 5, 6 and 8 (when there are) fails those lanes as
+/// `Closure::sample` fails (the batch's error names lane 5). Returns each lane's
+/// closure's lobe count and whether its albedo's luminance is below `prune`.
 fn matches_closures(
     description: &str,
     prune: f32,
@@ -374,7 +374,13 @@ fn matches_closures(
                 eta: Some(&mut eta),
                 roughness: None,
             };
-            material::sample(&exec, &input, randoms, out).unwrap();
+            let sampled = material::sample(&exec, &input, randoms, out);
+            if n > 5 {
+                let e = sampled.unwrap_err().message;
+                assert!(e.starts_with("lane 5: random number 0 (NaN)"), "{e}");
+            } else {
+                sampled.unwrap();
+            }
             material::albedo(&exec, &input, soa_mut(&mut albedo)).unwrap();
             let mut e_value = [vec![-1.0; n], vec![-1.0; n], vec![-1.0; n]];
             let mut e_pdf = vec![-1.0; n];
@@ -387,13 +393,7 @@ fn matches_closures(
             let isa = kernels.isa().name();
             for i in (0..n).filter(|&i| is_active(i)) {
                 let (c, wo) = closure(i);
-                // NaN, -inf and negatives to 0 (`clamp` would keep NaN).
-                let clamped = if u[0][i] >= 0.0 {
-                    u[0][i].min(1.0 - f32::EPSILON / 2.0)
-                } else {
-                    0.0
-                };
-                let want = c.sample(wo, [clamped, u[1][i], u[2][i]]);
+                let want = c.sample(wo, [u[0][i], u[1][i], u[2][i]]);
                 let got_ok = pdf[i] > 0.0;
                 let what = format!("{isa}, mask {}, lane {i}", mask.is_some());
                 match want {

@@ -23,7 +23,7 @@ use super::{
     EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3, Soa3Mut, SplitLanes, check_count,
     check_len, finish_lane, run_blocks,
 };
-use crate::closure::SampleResult;
+use crate::closure::{SampleResult, check_randoms};
 use crate::error::{Error, Status};
 use crate::kernels::expand::{ExpandEval, ExpandJob};
 use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, OwnRows};
@@ -901,8 +901,27 @@ fn sample_chunk(
     let slots = input.material.slots();
     // The random numbers, padding lanes repeating the last lane's; then the lobe
     // choice, as `Closure::sample` makes it.
-    for (row, src) in rows3(&mut s.u, len).into_iter().zip([u.u_lobe, u.u0, u.u1]) {
+    let mut u_rows = rows3(&mut s.u, len);
+    for (row, src) in u_rows.iter_mut().zip([u.u_lobe, u.u0, u.u1]) {
         gather(&mut row[..n], src, lanes);
+    }
+    // A lane with a non-finite one fails, as `Closure::sample` refuses it, and samples
+    // with a valid stand-in (checked lane by lane only when a row has one).
+    if !u_rows
+        .iter()
+        .all(|row| row[..n].iter().all(|v| v.is_finite()))
+    {
+        for (j, &lane) in lanes.iter().enumerate() {
+            let [a, b, c] = &mut u_rows;
+            if let Err(e) = check_randoms([a[j], b[j], c[j]]) {
+                (a[j], b[j], c[j]) = (0.5, 0.5, 0.5);
+                s.failed[j] = 1;
+                s.any_failed = true;
+                failure.fail(lane as usize, e);
+            }
+        }
+    }
+    for row in &mut u_rows {
         let last = row[n - 1];
         row[n..].fill(last);
     }
