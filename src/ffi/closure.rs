@@ -22,8 +22,9 @@ const _: () = assert!(std::mem::offset_of!(glint_arena, tag) == 0);
 pub struct glint_closure {
     /// `closure_tag(generation)` while live, then poisoned by reset or destroy.
     tag: Tag,
-    pub(crate) closure: Closure,
+    /// Beside the tag: every call reads both.
     runtime: *const glint_runtime,
+    pub(crate) closure: Closure,
 }
 const _: () = assert!(std::mem::offset_of!(glint_closure, tag) == 0);
 
