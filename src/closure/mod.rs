@@ -32,7 +32,7 @@ pub const MAX_LOBE_WEIGHT: f32 = 1e16;
 
 /// A lobe's (or a material entry's) RGB weight: finite, >= 0 and at most
 /// [`MAX_LOBE_WEIGHT`] per component.
-pub fn check_weight(owner: &str, weight: [f32; 3]) -> Result<(), Error> {
+pub(crate) fn check_weight(owner: &str, weight: [f32; 3]) -> Result<(), Error> {
     if let Some(i) = weight.iter().position(|w| !w.is_finite() || *w < 0.0) {
         return Err(Error::new(
             Status::InvalidArgument,

@@ -130,13 +130,13 @@ pub(crate) fn decode<T>(handle: *const T) -> (*const T, u16) {
 /// passed in their place read its slot's tag (and be refused) instead of faulting.
 #[inline(always)]
 pub(crate) fn shell<T>(handle: *const T) -> *const T {
-    handle.map_addr(|a| a & ADDRESS_MASK)
+    decode(handle).0
 }
 
 /// [`shell`] for a mutable handle.
 #[inline(always)]
 pub(crate) fn shell_mut<T>(handle: *mut T) -> *mut T {
-    handle.map_addr(|a| a & ADDRESS_MASK)
+    shell(handle.cast_const()).cast_mut()
 }
 
 /// Check a closure slot's tag against the generation of the handle that led to it.

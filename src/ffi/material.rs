@@ -474,11 +474,11 @@ pub unsafe extern "C" fn glint_material_destroy(material: *mut glint_material) {
 
 /// Build (and finish) the closure of one shading point of `material` in `arena`:
 /// `overrides` (NULL with `override_count == 0` for none; at most 64) set textured
-/// parameters for this point; the material expands into weighted lobes in the context's frame,
-/// drops those whose `luminance(weight * albedo(wo))` (by each lobe's albedo
-/// estimate, README "Pruning") is below the runtime's `prune=` threshold, and fixes
-/// lobe selection from the rest. The context and overrides are
-/// checked before the arena is touched, so a failing call uses no slot.
+/// parameters for this point; the material expands into weighted lobes in the
+/// context's frame, drops those whose `luminance(weight * albedo(wo))` (by each lobe's
+/// albedo estimate, README "Pruning") is below the runtime's `prune=` threshold, and
+/// fixes lobe selection from the rest. The context and overrides are checked before the
+/// arena is touched, so a failing call uses no slot.
 ///
 /// # Safety
 /// Handles are NULL or live; `context` NULL or readable; `overrides` NULL or valid
