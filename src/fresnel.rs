@@ -17,15 +17,51 @@ pub fn schlick_weight<L: Lane>(cos_theta: L) -> L {
     m2 * m2 * m
 }
 
-/// Burley's `FH = (1 - l.h)^5` of a reflection pair, symmetric in `wo` and `wi` (so
-/// reciprocal to the last bit) and without cancellation as `l.h -> 1`: with
-/// `l.h = sqrt((1 + wo.wi) / 2)`, `1 - l.h = |wo - wi|^2 / (4 (1 + l.h))`.
+/// The half vector of a reflection pair of unit directions and what Disney's lobes
+/// take from it, from one square root and one division: once inlined, every lobe of a
+/// fused kernel that asks shares them.
+#[derive(Clone, Copy)]
+pub struct HalfVector<L: Lane> {
+    /// `h = (wo + wi) / |wo + wi|`; 0 when `wo = -wi`.
+    pub h: Vec3<L>,
+    /// `|wo + wi| = 2 l.h`.
+    pub len: L,
+    /// Burley's `FH = (1 - l.h)^5`.
+    pub fh: L,
+    /// Whether `wo + wi` is not 0.
+    pub exists: L::Mask,
+}
+
+impl<L: Lane> HalfVector<L> {
+    /// With `len = |wo + wi|`, `l.h = len / 2` and `1 - l.h = |wo - wi|^2 / (2 (2 + len))`
+    /// (no cancellation as `l.h -> 1`); `1 / len` and `1 / (2 + len)` both come from
+    /// `r = 1 / (len (2 + len))`. Symmetric in `wo` and `wi`, so reciprocal to the last
+    /// bit. `len >= 3.7e-23` when not 0 (`len^2` is at least the smallest subnormal), so
+    /// `r` is finite.
+    #[inline(always)]
+    pub fn of(wo: Vec3<L>, wi: Vec3<L>) -> Self {
+        let hu = wo + wi;
+        let len2 = hu.length_squared();
+        let exists = len2.gt(L::zero());
+        let len = len2.sqrt();
+        let wide = L::splat(2.0) + len;
+        let r = L::one().safe_div(len * wide);
+        let m = ((wo - wi).length_squared() * L::splat(0.5) * (len * r)).min(L::one());
+        let m2 = m * m;
+        HalfVector {
+            h: hu * (wide * r),
+            len,
+            fh: m2 * m2 * m,
+            exists,
+        }
+    }
+}
+
+/// Burley's `FH = (1 - l.h)^5` of a reflection pair ([`HalfVector::fh`]; 0 when
+/// `wo = -wi`).
 #[inline(always)]
 pub fn schlick_weight_pair<L: Lane>(wo: Vec3<L>, wi: Vec3<L>) -> L {
-    let cos_d = ((L::one() + wo.dot(wi)) * L::splat(0.5)).safe_sqrt();
-    let m = ((wo - wi).length_squared() * L::splat(0.25) / (L::one() + cos_d)).min(L::one());
-    let m2 = m * m;
-    m2 * m2 * m
+    HalfVector::of(wo, wi).fh
 }
 
 /// Exact unpolarized Fresnel reflectance of a dielectric interface with relative

@@ -26,7 +26,7 @@ use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
 use crate::albedo_table::disney::ClearcoatTable;
-use crate::fresnel::schlick_weight_pair;
+use crate::fresnel::HalfVector;
 use crate::math::{Lane, Mask, Rgb, Vec3};
 use crate::microfacet::{Gtr1, Ndf};
 use crate::params::{ParamSpec, offset_of};
@@ -47,11 +47,11 @@ pub struct Prepared<L> {
     gtr1: Gtr1<L>,
 }
 
-/// `SmithG_GGX(c, 0.25)`.
+/// `1 / SmithG_GGX(c, 0.25) = c + sqrt(a^2 + c^2 - a^2 c^2)`.
 #[inline(always)]
-fn smith<L: Lane>(c: L) -> L {
+fn smith_denominator<L: Lane>(c: L) -> L {
     let a2 = L::splat(0.0625);
-    L::one() / (c + (a2 + c * c - a2 * c * c).sqrt())
+    c + (a2 + c * c - a2 * c * c).sqrt()
 }
 
 impl Model for DisneyClearcoat {
@@ -115,15 +115,19 @@ impl Model for DisneyClearcoat {
         if !wo.z.gt(L::zero()).any() {
             return Eval::zero();
         }
-        let hu = wo + wi;
-        let len2 = hu.length_squared();
-        let ok = both_above(wo, wi) & len2.gt(L::zero());
-        let h = hu * (L::one() / len2.sqrt());
-        let d = p.gtr1.d(h);
-        let vh = wo.dot(h);
-        let pdf = L::select(ok, p.gtr1.pdf(wo, h) / (L::splat(4.0) * vh), L::zero());
-        let fr = L::splat(0.04) + L::splat(0.96) * schlick_weight_pair(wo, wi);
-        let value = d * fr * smith(wi.z) * smith(wo.z) * wi.z;
+        let half = HalfVector::of(wo, wi);
+        let h = half.h;
+        let ok = both_above(wo, wi) & half.exists & h.z.gt(L::zero());
+        // Dr = norm / e (`Gtr1::denominator`), Gr = 1 / (c_i c_o), and the pdf
+        // Dr cos_h / (4 v.h) with v.h = |wo + wi| / 2: one division. e >= a^2 >= 1e-6,
+        // c_i, c_o >= 0.25 and |wo + wi| >= 3.7e-23, so the product is a normal float.
+        let e = p.gtr1.denominator(h);
+        let (c_i, c_o) = (smith_denominator(wi.z), smith_denominator(wo.z));
+        let inv = L::one() / L::select(ok, e * c_i * c_o * half.len, L::one());
+        let norm = p.gtr1.norm;
+        let pdf = L::select(ok, L::splat(0.5) * norm * h.z * c_i * c_o * inv, L::zero());
+        let fr = L::splat(0.04) + L::splat(0.96) * half.fh;
+        let value = norm * fr * wi.z * half.len * inv;
         let value = L::select(ok, value, L::zero());
         Eval {
             value: Rgb::new(value, value, value),

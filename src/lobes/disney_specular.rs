@@ -32,8 +32,8 @@ use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
 use crate::albedo_table::disney::SpecularTable;
-use crate::fresnel::schlick_weight_pair;
-use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::fresnel::HalfVector;
+use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::microfacet::{Ggx, Ndf, SmithNdf, burley_alpha};
 use crate::params::{ParamSpec, offset_of};
 
@@ -56,10 +56,10 @@ pub struct Prepared<L> {
     anisotropic: L,
 }
 
-/// `SmithG_GGX_aniso(w, gx, gy)`.
+/// `1 / SmithG_GGX_aniso(w, gx, gy) = w.z + sqrt((w.x gx)^2 + (w.y gy)^2 + w.z^2)`.
 #[inline(always)]
-fn smith<L: Lane>(w: Vec3<L>, gx: L, gy: L) -> L {
-    L::one() / (w.z + ((w.x * gx).sqr() + (w.y * gy).sqr() + w.z * w.z).sqrt())
+fn smith_denominator<L: Lane>(w: Vec3<L>, gx: L, gy: L) -> L {
+    w.z + ((w.x * gx).sqr() + (w.y * gy).sqr() + w.z * w.z).sqrt()
 }
 
 impl Model for DisneySpecular {
@@ -162,16 +162,22 @@ impl Model for DisneySpecular {
         if !wo.z.gt(L::zero()).any() {
             return Eval::zero();
         }
-        let hu = wo + wi;
-        let len2 = hu.length_squared();
-        let ok = both_above(wo, wi) & len2.gt(L::zero());
-        let h = hu * (L::one() / len2.sqrt());
-        let d = p.dist.d(h);
-        // The VNDF pdf G1(wo) D / (4 cos_o) (Heitz 2018 eq. 17).
-        let pdf = L::select(ok, L::splat(0.25) * d * p.dist.g1_over_cos(wo), L::zero());
-        let fh = schlick_weight_pair(wo, wi);
-        let g = smith(wi, p.gx, p.gy) * smith(wo, p.gx, p.gy);
-        let scale = d * g * wi.z;
+        let half = HalfVector::of(wo, wi);
+        let ok = both_above(wo, wi) & half.exists;
+        // D = n / q^2 (`Ggx::q`); Gs = 1 / (a_i a_o); the VNDF pdf G1(wo) D / (4 cos_o)
+        // (Heitz 2018 eq. 17) with G1(wo) / cos_o = 2 / b, b = cos_o + sigma(wo)
+        // (`SmithNdf::sigma`). One division serves them all: q^2 >= 1e-28, a_i, a_o >=
+        // 0.079 (the remapped alphas), b >= 0.001, so the product is a normal float.
+        let axy = p.dist.alpha_x * p.dist.alpha_y;
+        let n = axy * axy * axy * L::splat(INV_PI);
+        let q = p.dist.q(half.h);
+        let a_i = smith_denominator(wi, p.gx, p.gy);
+        let a_o = smith_denominator(wo, p.gx, p.gy);
+        let b = wo.z + p.dist.sigma(wo, wo.z);
+        let inv = L::one() / L::select(ok, q * q * a_i * a_o * b, L::one());
+        let pdf = L::select(ok, L::splat(0.5) * n * a_i * a_o * inv, L::zero());
+        let fh = half.fh;
+        let scale = n * wi.z * b * inv;
         let value = p.f0.map(
             #[inline(always)]
             |f0| (f0 + (L::one() - f0) * fh) * scale,

@@ -18,6 +18,15 @@ impl<L: Lane> Ggx<L> {
     fn projected2(&self, w: Vec3<L>) -> L {
         (self.alpha_x * w.x).sqr() + (self.alpha_y * w.y).sqr()
     }
+
+    /// `q = t (ax ay)^2 = (h.x ay)^2 + (h.y ax)^2 + (h.z ax ay)^2`, so that
+    /// `D = (ax ay)^3 / (pi q^2)` without dividing by the alphas; `q >= 1e-14` for a
+    /// unit `h` above the surface.
+    #[inline(always)]
+    pub fn q(&self, h: Vec3<L>) -> L {
+        let (ax, ay) = (self.alpha_x, self.alpha_y);
+        (h.x * ay).sqr() + (h.y * ax).sqr() + (h.z * (ax * ay)).sqr()
+    }
 }
 
 impl<L: Lane> Ndf<L> for Ggx<L> {
@@ -98,15 +107,13 @@ impl<L: Lane> SmithNdf<L> for Ggx<L> {
         (z * z + self.projected2(w)).sqrt()
     }
 
-    /// `D = 1 / (pi ax ay t^2)` with `t = (h.x / ax)^2 + (h.y / ay)^2 + h.z^2 = q / (ax
-    /// ay)^2`, `q = (h.x ay)^2 + (h.y ax)^2 + (h.z ax ay)^2`, so `P = 2 (ax ay)^3 / (pi q^2
-    /// B)`: one division. `q >= 1e-14` for a unit `h` on non-delta lanes and `B >=
-    /// MIN_ALPHA`, so that denominator is a positive normal float.
+    /// `D = (ax ay)^3 / (pi q^2)` ([`Ggx::q`]), so `P = 2 (ax ay)^3 / (pi q^2 B)`: one
+    /// division. `q >= 1e-14` on non-delta lanes and `B >= MIN_ALPHA`, so that
+    /// denominator is a positive normal float.
     #[inline(always)]
     fn pair_density(&self, v: &View<L>, h: Vec3<L>) -> L {
-        let (ax, ay) = (self.alpha_x, self.alpha_y);
-        let axy = ax * ay;
-        let q = (h.x * ay).sqr() + (h.y * ax).sqr() + (h.z * axy).sqr();
+        let axy = self.alpha_x * self.alpha_y;
+        let q = self.q(h);
         L::splat(2.0) * (axy * axy * axy) / (L::splat(PI) * q * q * v.b)
     }
 }

@@ -39,13 +39,21 @@ impl Gtr1<f32> {
     }
 }
 
+impl<L: Lane> Gtr1<L> {
+    /// `D`'s denominator `1 + (a^2 - 1) cos_m^2` for a unit `m`, written `a^2 cos_m^2 +
+    /// sin_m^2` with `sin_m^2` from `m`'s tangent components: `1 - cos_m^2` would cancel
+    /// near the peak, where `a^2` is as small as 1e-6. At least `a^2`.
+    #[inline(always)]
+    pub fn denominator(&self, m: Vec3<L>) -> L {
+        self.a2 * m.z * m.z + m.x * m.x + m.y * m.y
+    }
+}
+
 impl<L: Lane> Ndf<L> for Gtr1<L> {
-    /// The denominator `1 + (a^2 - 1) cos_m^2` written `a^2 cos_m^2 + sin_m^2` with
-    /// `sin_m^2` from `m`'s tangent components: `1 - cos_m^2` would cancel near the peak,
-    /// where `a^2` is as small as 1e-6.
+    /// `norm / denominator(m)`.
     #[inline(always)]
     fn d(&self, m: Vec3<L>) -> L {
-        let value = self.norm / (self.a2 * m.z * m.z + m.x * m.x + m.y * m.y);
+        let value = self.norm / self.denominator(m);
         L::select(m.z.gt(L::zero()), value, L::zero())
     }
 
