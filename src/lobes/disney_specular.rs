@@ -159,9 +159,8 @@ impl Model for DisneySpecular {
 
     #[inline(always)]
     fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, _mode: Transport) -> Eval<L> {
-        if !wo.z.gt(L::zero()).any() {
-            return Eval::zero();
-        }
+        // No early exit for a register below the surface: a branch here would keep a
+        // fused kernel from sharing the half vector with the other lobes.
         let half = HalfVector::of(wo, wi);
         let ok = both_above(wo, wi) & half.exists;
         // D = n / q^2 (`Ggx::q`); Gs = 1 / (a_i a_o); the VNDF pdf G1(wo) D / (4 cos_o)

@@ -202,9 +202,10 @@ impl MaterialModel for Disney {
         // Burley 2012's luminance approximation and hue.
         let lum = L::splat(0.3) * base.r + L::splat(0.6) * base.g + L::splat(0.1) * base.b;
         let has_hue = lum.gt(zero);
+        let inv_lum = one / L::select(has_hue, lum, one);
         let tint = base.map(
             #[inline(always)]
-            |c| L::select(has_hue, c / lum, one),
+            |c| L::select(has_hue, c * inv_lum, one),
         );
         let mix = |a: Rgb<L>, b: Rgb<L>, t: L| {
             a.zip(

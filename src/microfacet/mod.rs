@@ -169,8 +169,10 @@ fn upper<L: Lane>(w: Vec3<L>) -> Vec3<L> {
 pub fn burley_alpha<L: Lane>(roughness: L, anisotropic: L, min: f32) -> (L, L) {
     let alpha = roughness.clamp(L::zero(), L::one()).sqr();
     let aspect = (L::one() - L::splat(0.9) * anisotropic.clamp(L::zero(), L::one())).sqrt();
+    // Times the reciprocal: calls with the same `anisotropic` share one division.
+    let inv_aspect = L::one() / aspect;
     let min = L::splat(min);
-    ((alpha / aspect).max(min), (alpha * aspect).max(min))
+    ((alpha * inv_aspect).max(min), (alpha * aspect).max(min))
 }
 
 /// The Smith distributions a lobe can choose at run time, in choice order: each entry is
