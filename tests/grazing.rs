@@ -10,59 +10,10 @@
 mod common;
 mod reference;
 
-use common::{Block, Rng, close, closure, lobe, rows, soa, soa_mut};
-use glint::Closure;
-use glint::batch::{self, BatchInput, EvalOutput, Exec, Threads};
+use common::{Block, Rng, close, closure, eval_on_every_kernel_set, lobe};
 use glint::math::{Frame, Vec3};
-use glint::simd::Kernels;
 use glint::verify::{BATCH_TOLERANCE, batch_difference};
 use reference::{Fresnel, Micro, Ndf, V, cook_torrance, walter};
-
-/// `(value.r, pdf)` of every pair: the scalar closure call first (on the directions
-/// normalized as the C entry points and the batches normalize them: normalizing a
-/// unit f32 vector again can move it by an ulp), then one batch per kernel set.
-fn evaluate(c: &Closure, wo: &[Vec3<f32>], wi: &[Vec3<f32>]) -> Vec<(String, Vec<(f32, f32)>)> {
-    let unit = |v: Vec3<f32>| Vec3::try_unit(v.x, v.y, v.z, "w").unwrap();
-    let scalar = wo
-        .iter()
-        .zip(wi)
-        .map(|(&o, &i)| {
-            let e = c.eval(unit(o), unit(i)).unwrap();
-            (e.value.r, e.pdf)
-        })
-        .collect();
-    let mut out = vec![("scalar call".to_string(), scalar)];
-    let (o, i) = (rows(wo), rows(wi));
-    let n = wo.len();
-    for kernels in Kernels::available() {
-        let exec = Exec {
-            kernels,
-            threads: Threads::Caller,
-        };
-        let input = BatchInput {
-            count: n,
-            closures: c,
-            active: None,
-            wo: soa(&o),
-        };
-        let mut value = [vec![-7.0; n], vec![-7.0; n], vec![-7.0; n]];
-        let mut pdf = vec![-7.0; n];
-        batch::eval(
-            &exec,
-            &input,
-            soa(&i),
-            EvalOutput {
-                value: soa_mut(&mut value),
-                pdf: &mut pdf,
-                pdf_reverse: None,
-            },
-        )
-        .unwrap();
-        let lanes = value[0].iter().copied().zip(pdf).collect();
-        out.push((format!("{:?} batch", kernels.isa()), lanes));
-    }
-    out
-}
 
 /// Local `cos_o` from 0.1 down through the denormals to the smallest f32 (1.4e-45),
 /// then 0 and -0.
@@ -112,8 +63,8 @@ fn check_grazing(name: &str, block: &Block, reference: RefEval<'_>, wis: &[V], w
     }
     // Grazing wi (wo and wi swapped): finite and as the reference (to 1e-3: transmission
     // of the narrow lobes amplifies f32 rounding of the half vector).
-    for (source, lanes) in evaluate(&c, &wi, &wo) {
-        for (k, &(value, pdf)) in lanes.iter().enumerate() {
+    for (source, lanes) in eval_on_every_kernel_set(&c, &wi, &wo) {
+        for (k, &([value, ..], pdf)) in lanes.iter().enumerate() {
             let (want, want_pdf) = reference(V::from32(wi[k]), V::from32(wo[k]));
             let at = format!("{what} {source}: wo {:?} wi {:?}", wi[k], wo[k]);
             assert!(
@@ -123,9 +74,9 @@ fn check_grazing(name: &str, block: &Block, reference: RefEval<'_>, wis: &[V], w
             );
         }
     }
-    for (source, lanes) in evaluate(&c, &wo, &wi) {
+    for (source, lanes) in eval_on_every_kernel_set(&c, &wo, &wi) {
         let mut limit = (0.0, 0.0);
-        for (k, &(value, pdf)) in lanes.iter().enumerate() {
+        for (k, &([value, ..], pdf)) in lanes.iter().enumerate() {
             let (o, i) = (V::from32(wo[k]), V::from32(wi[k]));
             let at = format!("{what} {source}: wo {:?} wi {:?}", wo[k], wi[k]);
             assert!(
@@ -243,7 +194,7 @@ fn dielectric_over_the_eta_range_matches_the_reference_on_every_isa() {
                 let block = grazing_params("dielectric", ndf, r, 0.0).float("eta", eta);
                 let m = Micro::from_roughness(ndf, r, 0.0);
                 let c = closure("dielectric", &block, Frame::IDENTITY);
-                let results = evaluate(&c, &wo, &wi);
+                let results = eval_on_every_kernel_set(&c, &wo, &wi);
                 let scalar = &results[0].1;
                 for (source, lanes) in &results {
                     let (mut worst_ref, mut worst_scalar) = (0.0f64, 0.0f64);
@@ -252,12 +203,12 @@ fn dielectric_over_the_eta_range_matches_the_reference_on_every_isa() {
                         // which the ~1e-8 by which an f32 unit vector is not unit would shift.
                         let (o, i) = (V::from32(wo[k]).normalize(), V::from32(wi[k]).normalize());
                         let (want, want_pdf) = walter(&m, f64::from(eta), o, i, false);
-                        let (value, pdf) = lanes[k];
+                        let ([value, ..], pdf) = lanes[k];
                         worst_ref = worst_ref
                             .max(batch_difference(value, want as f32))
                             .max(batch_difference(pdf, want_pdf as f32));
                         worst_scalar = worst_scalar
-                            .max(batch_difference(value, scalar[k].0))
+                            .max(batch_difference(value, scalar[k].0[0]))
                             .max(batch_difference(pdf, scalar[k].1));
                     }
                     let what = format!("eta {eta} {ndf:?} r {r} {source}");

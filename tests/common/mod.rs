@@ -1,15 +1,16 @@
 //! Test plumbing shared by the integration tests: lobe lookup, parameter blocks built
 //! by parameter name from each lobe's schema, one-lobe closures, SoA rows for the batch
-//! calls, a deterministic random generator and tolerance checks. No expected value is
-//! computed here (see `tests/reference`).
+//! calls, the eval of a closure on every kernel set, a deterministic random generator
+//! and tolerance checks. No expected value is computed here (see `tests/reference`).
 #![allow(dead_code)]
 
 use glint::Closure;
-use glint::batch::{Soa3, Soa3Mut};
+use glint::batch::{self, BatchInput, EvalOutput, Exec, Soa3, Soa3Mut, Threads};
 use glint::lobes::{LobeType, Transport};
 use glint::math::{Frame, Vec3};
 use glint::params::{ParamKind, ParamSpec, block_size, offset_of, write_defaults};
 use glint::registry::{BUILTINS, Registry};
+use glint::simd::Kernels;
 
 /// The built-in lobe type named `name`.
 pub fn lobe(name: &str) -> &'static dyn LobeType {
@@ -184,6 +185,62 @@ pub fn assert_close3(actual: [f32; 3], expected: [f64; 3], rel: f64, abs: f64, w
             &format!("{what} [channel {c}]"),
         );
     }
+}
+
+/// Each source's `(value, pdf)` per lane, named by the source.
+pub type EvalsBySource = Vec<(String, Vec<([f32; 3], f32)>)>;
+
+/// `(value, pdf)` of `c` at every pair: the scalar closure call first (on the
+/// directions normalized as the C entry points and the batches normalize them:
+/// normalizing a unit f32 vector again can move it by an ulp), then one batch per
+/// kernel set this CPU has.
+pub fn eval_on_every_kernel_set(
+    c: &Closure,
+    wo: &[Vec3<f32>],
+    wi: &[Vec3<f32>],
+) -> EvalsBySource {
+    let unit = |v: Vec3<f32>| Vec3::try_unit(v.x, v.y, v.z, "w").unwrap();
+    let scalar = wo
+        .iter()
+        .zip(wi)
+        .map(|(&o, &i)| {
+            let e = c.eval(unit(o), unit(i)).unwrap();
+            (e.value.to_array(), e.pdf)
+        })
+        .collect();
+    let mut out = vec![("scalar call".to_string(), scalar)];
+    let (o, i) = (rows(wo), rows(wi));
+    let n = wo.len();
+    for kernels in Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Caller,
+        };
+        let input = BatchInput {
+            count: n,
+            closures: c,
+            active: None,
+            wo: soa(&o),
+        };
+        let mut value = [vec![-7.0; n], vec![-7.0; n], vec![-7.0; n]];
+        let mut pdf = vec![-7.0; n];
+        batch::eval(
+            &exec,
+            &input,
+            soa(&i),
+            EvalOutput {
+                value: soa_mut(&mut value),
+                pdf: &mut pdf,
+                pdf_reverse: None,
+            },
+        )
+        .unwrap();
+        let lanes = (0..n)
+            .map(|k| ([value[0][k], value[1][k], value[2][k]], pdf[k]))
+            .collect();
+        out.push((format!("{:?} batch", kernels.isa()), lanes));
+    }
+    out
 }
 
 /// Every output of the four batch calls for `n` lanes, as SoA rows.
