@@ -47,11 +47,12 @@ pub struct Prepared<L> {
     gtr1: Gtr1<L>,
 }
 
-/// `1 / SmithG_GGX(c, 0.25) = c + sqrt(a^2 + c^2 - a^2 c^2)`.
+/// `1 / SmithG_GGX(c, 0.25) = c + sqrt(a^2 + c^2 - a^2 c^2)`, the root's argument as
+/// `c^2 (1 - a^2) + a^2` (no cancellation: both terms are positive).
 #[inline(always)]
 fn smith_denominator<L: Lane>(c: L) -> L {
-    let a2 = L::splat(0.0625);
-    c + (a2 + c * c - a2 * c * c).sqrt()
+    let a2 = 0.0625;
+    c + (c * c).mul_add(L::splat(1.0 - a2), L::splat(a2)).sqrt()
 }
 
 impl Model for DisneyClearcoat {
@@ -125,7 +126,7 @@ impl Model for DisneyClearcoat {
         let inv = L::one() / L::select(ok, e * c_i * c_o * half.len, L::one());
         let norm = p.gtr1.norm;
         let pdf = L::select(ok, L::splat(0.5) * norm * h.z * c_i * c_o * inv, L::zero());
-        let fr = L::splat(0.04) + L::splat(0.96) * half.fh;
+        let fr = L::splat(0.96).mul_add(half.fh, L::splat(0.04));
         let value = norm * fr * wi.z * half.len * inv;
         let value = L::select(ok, value, L::zero());
         Eval {

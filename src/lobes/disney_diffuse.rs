@@ -68,12 +68,13 @@ fn shape<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>) -> L {
     let cos2_d = ((L::one() + wo.dot(wi)) * L::splat(0.5)).clamp(L::zero(), L::one());
     let (fl, fv) = (schlick_weight(cos_i), schlick_weight(cos_o));
     // mix(1, F90, FL) mix(1, F90, FV) = (1 + (F90 - 1) FL) (1 + (F90 - 1) FV).
-    let pair = |f90_minus_1: L| (L::one() + f90_minus_1 * fl) * (L::one() + f90_minus_1 * fv);
-    let fd = pair(L::splat(2.0) * p.roughness * cos2_d - L::splat(0.5));
-    let fss = pair(p.roughness * cos2_d - L::one());
+    let pair =
+        |f90_minus_1: L| f90_minus_1.mul_add(fl, L::one()) * f90_minus_1.mul_add(fv, L::one());
+    let fd = pair((L::splat(2.0) * p.roughness).mul_add(cos2_d, L::splat(-0.5)));
+    let fss = pair(p.roughness.mul_add(cos2_d, -L::one()));
     let half = cos_i * L::splat(0.5);
-    let ss = L::splat(1.25) * (fss * (cos_i.safe_div(cos_i + cos_o) - half) + half);
-    let mixed = fd * cos_i * (L::one() - p.subsurface) + ss * p.subsurface;
+    let ss = L::splat(1.25) * fss.mul_add(cos_i.safe_div(cos_i + cos_o) - half, half);
+    let mixed = (fd * cos_i).mul_add(L::one() - p.subsurface, ss * p.subsurface);
     L::select(ok, mixed, L::zero())
 }
 

@@ -59,7 +59,8 @@ pub struct Prepared<L> {
 /// `1 / SmithG_GGX_aniso(w, gx, gy) = w.z + sqrt((w.x gx)^2 + (w.y gy)^2 + w.z^2)`.
 #[inline(always)]
 fn smith_denominator<L: Lane>(w: Vec3<L>, gx: L, gy: L) -> L {
-    w.z + ((w.x * gx).sqr() + (w.y * gy).sqr() + w.z * w.z).sqrt()
+    let (x, y) = (w.x * gx, w.y * gy);
+    w.z + x.mul_add(x, y.mul_add(y, w.z * w.z)).sqrt()
 }
 
 impl Model for DisneySpecular {
@@ -179,7 +180,7 @@ impl Model for DisneySpecular {
         let scale = n * wi.z * b * inv;
         let value = p.f0.map(
             #[inline(always)]
-            |f0| (f0 + (L::one() - f0) * fh) * scale,
+            |f0| (L::one() - f0).mul_add(fh, f0) * scale,
         );
         Eval {
             value: Rgb::select(ok, value, Rgb::zero()),

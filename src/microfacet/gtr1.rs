@@ -45,7 +45,7 @@ impl<L: Lane> Gtr1<L> {
     /// near the peak, where `a^2` is as small as 1e-6. At least `a^2`.
     #[inline(always)]
     pub fn denominator(&self, m: Vec3<L>) -> L {
-        self.a2 * m.z * m.z + m.x * m.x + m.y * m.y
+        (self.a2 * m.z).mul_add(m.z, m.x.mul_add(m.x, m.y * m.y))
     }
 }
 

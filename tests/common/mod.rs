@@ -194,11 +194,7 @@ pub type EvalsBySource = Vec<(String, Vec<([f32; 3], f32)>)>;
 /// directions normalized as the C entry points and the batches normalize them:
 /// normalizing a unit f32 vector again can move it by an ulp), then one batch per
 /// kernel set this CPU has.
-pub fn eval_on_every_kernel_set(
-    c: &Closure,
-    wo: &[Vec3<f32>],
-    wi: &[Vec3<f32>],
-) -> EvalsBySource {
+pub fn eval_on_every_kernel_set(c: &Closure, wo: &[Vec3<f32>], wi: &[Vec3<f32>]) -> EvalsBySource {
     let unit = |v: Vec3<f32>| Vec3::try_unit(v.x, v.y, v.z, "w").unwrap();
     let scalar = wo
         .iter()
