@@ -66,7 +66,12 @@ pub struct ExpandEval<'a> {
 }
 
 /// One register's slots: decoded (into the rows, when wanted), estimated.
-struct Slots<'j, L> {
+/// `BY_SLOT`: take each slot's estimate only where some lane weights it (and none when
+/// no lane weights two slots). A register whose lanes weight every slot, some lane two
+/// or more, takes the form without those branches, so LLVM computes what the
+/// estimates share (`sqrt(cos_o)` of the table lookups) once; the same estimates either
+/// way.
+struct Slots<'j, L, const BY_SLOT: bool> {
     i: usize,
     len: usize,
     wo: Vec3<L>,
@@ -83,7 +88,7 @@ struct Slots<'j, L> {
     alone: bool,
 }
 
-impl<L: Lane> SlotVisitor for Slots<'_, L> {
+impl<L: Lane, const BY_SLOT: bool> SlotVisitor for Slots<'_, L, BY_SLOT> {
     #[inline(always)]
     fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
         let raw = &self.expansion.params[k][..block_size(M::PARAMS)];
@@ -103,9 +108,9 @@ impl<L: Lane> SlotVisitor for Slots<'_, L> {
         let weight = self.expansion.weight[k];
         let zero = L::zero();
         let emitted = weight.any_positive();
-        if self.alone {
+        if BY_SLOT && self.alone {
             self.share[k] = L::select(emitted, L::one(), zero);
-        } else if emitted.any() {
+        } else if !BY_SLOT || emitted.any() {
             let p = M::prepare(Params::new(decoded));
             let albedo = M::albedo_estimate(&p, self.wo, Transport::Radiance);
             self.share[k] = L::select(emitted, (weight * albedo).luminance(), zero);
@@ -127,7 +132,11 @@ impl<L: Lane> SlotVisitor for Zero<'_, L> {
 }
 
 /// One register's eval sums over its kept slots (`kernels::fused::rows`'s terms).
-struct EvalSlots<'j, L> {
+/// `SKIP_DROPPED`: skip slots kept on no lane of the register. Without it every slot
+/// is evaluated with no branch between them, so LLVM computes what their evals share
+/// (the half vector) once; a register that keeps every slot on some lane takes that
+/// form (the same sums: no slot is skipped either way).
+struct EvalSlots<'j, L, const SKIP_DROPPED: bool> {
     decoded: &'j [[L; MAX_DECODED_LEN]; MAX_SLOTS],
     weight: &'j [Rgb<L>; MAX_SLOTS],
     probability: &'j [L; MAX_SLOTS],
@@ -136,12 +145,12 @@ struct EvalSlots<'j, L> {
     sum: Option<(Rgb<L>, L)>,
 }
 
-impl<L: Lane> SlotVisitor for EvalSlots<'_, L> {
+impl<L: Lane, const SKIP_DROPPED: bool> SlotVisitor for EvalSlots<'_, L, SKIP_DROPPED> {
     #[inline(always)]
     fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
         let probability = self.probability[k];
         // A slot kept on no lane adds `0 f`: nothing.
-        if !probability.gt(L::zero()).any() {
+        if SKIP_DROPPED && !probability.gt(L::zero()).any() {
             return Ok(());
         }
         let p = M::prepare(Params::new(&self.decoded[k][..M::DECODED_LEN]));
@@ -217,6 +226,41 @@ fn holds<L: Lane>(raw: &[L], block: &[f32]) -> bool {
     all
 }
 
+/// The slots' decoded blocks, weights and selection probabilities of one register.
+type SlotTerms<'j, L> = (
+    &'j [[L; MAX_DECODED_LEN]; MAX_SLOTS],
+    &'j [Rgb<L>; MAX_SLOTS],
+    &'j [L; MAX_SLOTS],
+);
+
+/// [`EvalSlots`]' sums at `(wo, wi)`.
+#[inline(always)]
+fn eval_sums<M: MaterialModel, L: Lane, const SKIP_DROPPED: bool>(
+    (decoded, weight, probability): SlotTerms<'_, L>,
+    wo: Vec3<L>,
+    wi: Vec3<L>,
+) -> Option<(Rgb<L>, L)> {
+    let mut sums = EvalSlots::<L, SKIP_DROPPED> {
+        decoded,
+        weight,
+        probability,
+        wo,
+        wi,
+        sum: None,
+    };
+    M::Slots::visit(&mut sums).expect("an eval does not fail");
+    sums.sum
+}
+
+/// [`Slots`] of one register visited: each slot's share.
+#[inline(always)]
+fn stage_slots<M: MaterialModel, L: Lane, const BY_SLOT: bool>(
+    mut slots: Slots<'_, L, BY_SLOT>,
+) -> [L; MAX_SLOTS] {
+    M::Slots::visit(&mut slots).expect("a slot's staging does not fail");
+    slots.share
+}
+
 #[inline(always)]
 fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     let len = job.len;
@@ -256,25 +300,34 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
         // slot per register), and dropped where `expand` writes.
         M::Slots::visit(&mut Zero(&mut e)).expect("zeroing does not fail");
         M::expand(Params::new(&raw[..param_count]), &ctx, &mut e);
-        let mut slots = Slots {
-            i,
-            len,
-            wo: ctx.wo,
-            expansion: &e,
-            cache: &mut cache,
-            rows: job.eval.is_none().then_some(&mut *job.decoded),
-            decoded: &mut decoded,
-            share: [L::zero(); MAX_SLOTS],
-            alone: {
-                let mut weighted = L::zero();
-                for w in &e.weight[..count] {
-                    weighted += L::select(w.any_positive(), L::one(), L::zero());
-                }
-                weighted.le(L::one()).all()
-            },
+        let (mut weighted, mut every_emitted) = (L::zero(), true);
+        for w in &e.weight[..count] {
+            let emitted = w.any_positive();
+            weighted += L::select(emitted, L::one(), L::zero());
+            every_emitted &= emitted.any();
+        }
+        let alone = weighted.le(L::one()).all();
+        let rows = job.eval.is_none().then_some(&mut *job.decoded);
+        macro_rules! slots {
+            ($by_slot:literal) => {
+                stage_slots::<M, L, $by_slot>(Slots {
+                    i,
+                    len,
+                    wo: ctx.wo,
+                    expansion: &e,
+                    cache: &mut cache,
+                    rows,
+                    decoded: &mut decoded,
+                    share: [L::zero(); MAX_SLOTS],
+                    alone,
+                })
+            };
+        }
+        let share = if every_emitted && !alone {
+            slots!(false)
+        } else {
+            slots!(true)
         };
-        M::Slots::visit(&mut slots).expect("a slot's staging does not fail");
-        let share = slots.share;
         let mut weight = e.weight;
         let probability = material_rows::select(count, job.prune, &share, &mut weight);
         for (kept, p) in job.kept[..count].iter_mut().zip(&probability) {
@@ -290,16 +343,18 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             continue;
         };
         let wi = load3::<L>(eval.wi, i, L::LANES);
-        let mut sums = EvalSlots {
-            decoded: &decoded,
-            weight: &weight,
-            probability: &probability,
-            wo: ctx.wo,
-            wi: frame.to_local(wi),
-            sum: None,
+        let wi = frame.to_local(wi);
+        let mut every_kept = true;
+        for p in &probability[..count] {
+            every_kept &= p.gt(L::zero()).any();
+        }
+        let terms = (&decoded, &weight, &probability);
+        let sum = if every_kept {
+            eval_sums::<M, L, false>(terms, ctx.wo, wi)
+        } else {
+            eval_sums::<M, L, true>(terms, ctx.wo, wi)
         };
-        M::Slots::visit(&mut sums).expect("an eval does not fail");
-        let (value, pdf) = sums.sum.unwrap_or((Rgb::zero(), L::zero()));
+        let (value, pdf) = sum.unwrap_or((Rgb::zero(), L::zero()));
         if let Some(rows) = eval.value.as_mut() {
             for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
                 v.store(&mut row[i..]);
