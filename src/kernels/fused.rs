@@ -244,7 +244,7 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
     let wi_rows = [&wi0[..len], &wi1[..len], &wi2[..len]];
     let mut value = job
         .value
-        .take()
+        .as_mut()
         .map(|[r, g, b]| [&mut r[..len], &mut g[..len], &mut b[..len]]);
     for i in (0..len).step_by(L::LANES) {
         let n = L::LANES.min(len - i);

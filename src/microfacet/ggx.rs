@@ -20,8 +20,9 @@ impl<L: Lane> Ggx<L> {
     }
 
     /// `q = t (ax ay)^2 = (h.x ay)^2 + (h.y ax)^2 + (h.z ax ay)^2`, so that
-    /// `D = (ax ay)^3 / (pi q^2)` without dividing by the alphas; `q >= 1e-14` for a
-    /// unit `h` above the surface.
+    /// `D = (ax ay)^3 / (pi q^2)` without dividing by the alphas; for a unit `h`,
+    /// `q >= min(ax, ay, ax ay)^2`: at least 1e-14 when one alpha is at least
+    /// `DELTA_ALPHA` and the other `MIN_ALPHA`.
     #[inline(always)]
     pub fn q(&self, h: Vec3<L>) -> L {
         let (ax, ay) = (self.alpha_x, self.alpha_y);
