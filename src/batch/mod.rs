@@ -20,7 +20,7 @@ use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
 use crate::kernels::{
     AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, fused,
-    fused::{FusedEvalJob, FusedMixtureJob},
+    fused::{FusedEvalJob, FusedSampleJob},
     mixture,
 };
 use crate::kernels::{
@@ -1048,6 +1048,23 @@ fn sample_block<'a, C: ClosureSource<'a>>(
     let Some(closure) = in_place(input).filter(|c| !c.lobes().is_empty()) else {
         return sample_staged(kernels, input, u, start..end, start, s, out);
     };
+    // A fused shape samples the block in one pass over the caller's rows.
+    if let Some(frame) = shared_frame(closure)
+        && let Some(fused) = fused::for_closure(closure)
+    {
+        let mut job = FusedSampleJob {
+            mode: closure.transport(),
+            frame,
+            lobes: fused.lobes,
+            wo: rows(input.wo, &(start..end)),
+            u: [u.u_lobe, u.u0, u.u1].map(|row| &row[start..end]),
+            out: out.finish_rows(&(0..end - start)),
+        };
+        if (fused.sample)(kernels, &mut job) {
+            return Ok(());
+        }
+        return sample_staged(kernels, input, u, start..end, start, s, out);
+    }
     // One lobe, which every lane chooses: finished in the kernel.
     let one_lobe = closure.lobes().len() == 1 && closure.lobes()[0].probability == 1.0;
     let (size, rows) = if one_lobe {
@@ -1185,27 +1202,13 @@ fn mixture_in_place(
             return false;
         }
     }
-    let frame = shared_frame(closure);
-    if let Some(frame) = frame
-        && let Some(fused) = fused::for_closure(closure)
-    {
-        // A fused shape sums each row's mixture in one pass, the same bits.
-        let mut job = FusedMixtureJob {
-            mode: closure.transport(),
-            frame,
-            lobes: fused.lobes,
-            starts: &starts[..=count],
-            wo: view3(&c.wo, len),
-            wi: view3(&s.wi, len),
-            own_value: view3(&s.sample_value, len),
-            own_pdf: &s.sample_pdf[..len],
-            value: rows3(&mut s.value, len),
-            pdf: grow(&mut s.pdf, len),
-        };
-        (fused.mixture)(kernels, &mut job);
-    } else {
-        mixture_lobe_by_lobe(kernels, closure, frame, &starts[..=count], s);
-    }
+    mixture_lobe_by_lobe(
+        kernels,
+        closure,
+        shared_frame(closure),
+        &starts[..=count],
+        s,
+    );
     let c = &mut s.compact;
     // The closure's samples in sorted order, then gathered into the caller's.
     let (want_value, want_eta) = (out.value.is_some(), out.eta.is_some());

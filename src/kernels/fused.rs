@@ -8,14 +8,18 @@
 //! the half vector) and the sums are stored once. The arithmetic is the unfused
 //! path's, operation for operation, so the outputs are the same bits.
 
-use super::{Directions, MAX_LOBE_PARAMS, direction, load_frame, load_rgb, rgb_at, store};
+use super::mixture::{self, clamp_random};
+use super::{
+    Directions, FinishOutput, MAX_LOBE_PARAMS, direction, load, load_frame, load_rgb, rgb_at,
+    store, store_finished,
+};
 use crate::closure::Closure;
 use crate::lobes::disney_clearcoat::DisneyClearcoat;
 use crate::lobes::disney_diffuse::DisneyDiffuse;
 use crate::lobes::disney_sheen::DisneySheen;
 use crate::lobes::disney_specular::DisneySpecular;
-use crate::lobes::{Model, Params, Transport};
-use crate::math::{Frame, Lane, LaneFrame, Rgb, Vec3};
+use crate::lobes::{Eval, InPlace, Model, Params, Sample, Settle, ToWorld, Transport, both_above};
+use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::simd::{Kernels, kernel};
 use std::any::TypeId;
 
@@ -64,19 +68,18 @@ impl<L: Lane> Term<L> {
 
 /// A tuple of lobe models evaluated together.
 pub trait Shape: 'static {
+    /// Lobes in the shape.
+    const LOBES: usize;
     type Prepared<L: Lane>;
     /// Whether `models` are this shape's models, in order.
     fn matches(models: &[Option<TypeId>]) -> bool;
     /// Each lobe's decoded block, in order.
     fn prepare<L: Lane>(params: &[Params<'_, L>; MAX_FUSED]) -> Self::Prepared<L>;
-    /// `(sum weight_k f_k, sum p_k pdf_k)` in lobe order at `(wo, wi)`. Without `own`
-    /// as an eval sums (from the first lobe's terms, as lobe kernels store then add);
-    /// with `own = (k, value, p pdf)`, a mixture at lobe `k`'s sample, whose own terms
-    /// stand for lobe `k`'s, summed from zero as a mixture sample's rows are.
+    /// `(sum weight_k f_k, sum p_k pdf_k)` in lobe order at `(wo, wi)`, from the
+    /// first lobe's terms, as lobe kernels store then add.
     fn sum<L: Lane>(
         p: &Self::Prepared<L>,
         terms: &[Term<L>; MAX_FUSED],
-        own: Option<(usize, Rgb<L>, L)>,
         wo: Vec3<L>,
         wi: Vec3<L>,
         mode: Transport,
@@ -94,6 +97,23 @@ pub trait Shape: 'static {
         wi: Vec3<L>,
         mode: Transport,
     ) -> (Rgb<L>, L);
+    /// Each lane's sample of lobe `chosen` (an index as a lane value), in the local
+    /// frame and not yet settled: its `valid`, value and pdf are not read (each model
+    /// is [`Model::VALID_ABOVE`]).
+    fn sample<L: Lane>(
+        p: &Self::Prepared<L>,
+        chosen: L,
+        wo: Vec3<L>,
+        u: [L; 3],
+        mode: Transport,
+    ) -> Sample<L>;
+    /// Each lobe's own `f |cos|` and pdf at `(wo, wi)`, in order.
+    fn evals<L: Lane>(
+        p: &Self::Prepared<L>,
+        wo: Vec3<L>,
+        wi: Vec3<L>,
+        mode: Transport,
+    ) -> [Eval<L>; MAX_FUSED];
 }
 
 /// `weight f` and `p pdf` of one lobe, as the eval kernel computes them.
@@ -131,6 +151,7 @@ fn uniform<'a, L: Lane>(
 macro_rules! shape {
     ($first:ident $(, $m:ident)*) => {
         impl<$first: Model $(, $m: Model)*> Shape for ($first, $($m,)*) {
+            const LOBES: usize = [stringify!($first) $(, stringify!($m))*].len();
             type Prepared<L: Lane> = ($first::Prepared<L>, $($m::Prepared<L>,)*);
             fn matches(models: &[Option<TypeId>]) -> bool {
                 let shape = [TypeId::of::<$first>() $(, TypeId::of::<$m>())*];
@@ -151,27 +172,16 @@ macro_rules! shape {
             fn sum<L: Lane>(
                 p: &Self::Prepared<L>,
                 terms: &[Term<L>; MAX_FUSED],
-                own: Option<(usize, Rgb<L>, L)>,
                 wo: Vec3<L>,
                 wi: Vec3<L>,
                 mode: Transport,
             ) -> (Rgb<L>, L) {
                 let ($first, $($m,)*) = p;
-                let (v, q) = match own {
-                    Some((0, v, q)) => (v, q),
-                    _ => weighted::<$first, L>($first, &terms[0], wo, wi, mode),
-                };
-                let (mut value, mut pdf) = match own {
-                    Some(_) => (Rgb::zero() + v, L::zero() + q),
-                    None => (v, q),
-                };
+                let (mut value, mut pdf) = weighted::<$first, L>($first, &terms[0], wo, wi, mode);
                 let mut k = 0;
                 $(
                     k += 1;
-                    let (v, q) = match own {
-                        Some((o, v, q)) if o == k => (v, q),
-                        _ => weighted::<$m, L>($m, &terms[k], wo, wi, mode),
-                    };
+                    let (v, q) = weighted::<$m, L>($m, &terms[k], wo, wi, mode);
                     value = value + v;
                     pdf += q;
                 )*
@@ -203,6 +213,46 @@ macro_rules! shape {
                     pdf += L::select(mine, own_pdf, q);
                 )*
                 (value, pdf)
+            }
+            #[inline(always)]
+            #[allow(non_snake_case)]
+            fn sample<L: Lane>(
+                p: &Self::Prepared<L>,
+                chosen: L,
+                wo: Vec3<L>,
+                [uc, u0, u1]: [L; 3],
+                mode: Transport,
+            ) -> Sample<L> {
+                const { assert!($first::VALID_ABOVE $(&& $m::VALID_ABOVE)*) };
+                let ($first, $($m,)*) = p;
+                // Every lobe samples every lane (no branch: LLVM shares what the
+                // samplers compute alike); each lane keeps its chosen lobe's.
+                let mut s = $first::sample($first, wo, uc, u0, u1, mode, &mut InPlace);
+                let mut k = 0;
+                $(
+                    k += 1;
+                    let t = $m::sample($m, wo, uc, u0, u1, mode, &mut InPlace);
+                    s = Sample::select(chosen.eq(L::splat(k as f32)), t, s);
+                )*
+                s
+            }
+            #[inline(always)]
+            #[allow(non_snake_case)]
+            fn evals<L: Lane>(
+                p: &Self::Prepared<L>,
+                wo: Vec3<L>,
+                wi: Vec3<L>,
+                mode: Transport,
+            ) -> [Eval<L>; MAX_FUSED] {
+                let ($first, $($m,)*) = p;
+                let mut e = [Eval::zero(); MAX_FUSED];
+                e[0] = $first::eval($first, wo, wi, mode);
+                let mut k = 0;
+                $(
+                    k += 1;
+                    e[k] = $m::eval($m, wo, wi, mode);
+                )*
+                e
             }
         }
     };
@@ -253,66 +303,112 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
         if out_of_range {
             return false;
         }
-        let sums = S::sum(
-            &p,
-            &terms,
-            None,
-            frame.to_local(wo),
-            frame.to_local(wi),
-            job.mode,
-        );
+        let sums = S::sum(&p, &terms, frame.to_local(wo), frame.to_local(wi), job.mode);
         store_sums(sums, &mut value, job.pdf, i, n);
     }
     true
 }
 
-/// A mixture sample's sums over a chunk sorted by chosen lobe: lobe `k`'s samples
-/// in rows `starts[k]..starts[k + 1]` (whole registers).
-pub struct FusedMixtureJob<'a> {
+/// A mixture sample over the caller's rows, each register sampled, evaluated and
+/// finished in one pass (no grouping of lanes by lobe): every lobe samples each lane
+/// and the lane keeps its chosen lobe's direction; every lobe is evaluated there, the
+/// chosen one giving the sample its own value and pdf, as its sampler computes them
+/// (at the settled direction, which is also where the others are evaluated), so the
+/// outputs are those of the grouped path, bit for bit.
+pub struct FusedSampleJob<'a> {
     pub mode: Transport,
     pub frame: Frame,
     /// The closure's lobes in order (as [`FusedEvalJob::lobes`]).
     pub lobes: [FusedLobe<'a>; MAX_FUSED],
-    pub starts: &'a [usize],
-    /// Unit `wo` and the sampled `wi` (normalized once more, as an eval given it back
-    /// would: [`Directions::Sampled`]), world space.
+    /// The caller's `wo` ([`Directions::Raw`]) and random numbers: the lobe choice,
+    /// then the direction's two dimensions.
     pub wo: [&'a [f32]; 3],
-    pub wi: [&'a [f32]; 3],
-    /// Each row's own sample: weighted value and pdf (not yet times `p`).
-    pub own_value: [&'a [f32]; 3],
-    pub own_pdf: &'a [f32],
-    /// The mixture's value and `sum p_k pdf_k`.
-    pub value: [&'a mut [f32]; 3],
-    pub pdf: &'a mut [f32],
+    pub u: [&'a [f32]; 3],
+    pub out: FinishOutput<'a>,
 }
 
 #[inline(always)]
-fn mixture_body<S: Shape, L: Lane>(job: &mut FusedMixtureJob<'_>) {
+fn sample_body<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
+    let len = job.out.pdf.len();
     let (params, terms) = uniform::<L>(&job.lobes);
     let p = S::prepare::<L>(&params);
     let frame = LaneFrame::<L>::splat(&job.frame);
-    let mut unused = false;
-    for (own, run) in job.starts.windows(2).enumerate() {
-        let probability = L::splat(job.lobes[own].probability);
-        for i in (run[0]..run[1]).step_by(L::LANES) {
-            let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
-            let wi = direction(job.wi, i, L::LANES, Directions::Sampled, &mut unused);
-            let own_value = load_rgb(job.own_value, i, L::LANES);
-            let own_pdf = probability * L::load(&job.own_pdf[i..]);
-            let (value, pdf) = S::sum(
-                &p,
-                &terms,
-                Some((own, own_value, own_pdf)),
-                frame.to_local(wo),
-                frame.to_local(wi),
-                job.mode,
-            );
-            for (v, row) in value.to_array().into_iter().zip(job.value.iter_mut()) {
-                v.store(&mut row[i..]);
-            }
-            pdf.store(&mut job.pdf[i..]);
-        }
+    let mut probabilities = [0.0f32; MAX_FUSED];
+    for (q, l) in probabilities.iter_mut().zip(&job.lobes) {
+        *q = l.probability;
     }
+    let probabilities = &probabilities[..S::LOBES];
+    let mut out_of_range = false;
+    for i in (0..len).step_by(L::LANES) {
+        let n = L::LANES.min(len - i);
+        let wo = direction(job.wo, i, n, Directions::Raw, &mut out_of_range);
+        let u_lobe = load::<L>(job.u[0], i, n, 0.5);
+        let u0 = load::<L>(job.u[1], i, n, 0.5);
+        let u1 = load::<L>(job.u[2], i, n, 0.5);
+        out_of_range |= !(u_lobe.is_finite() & u0.is_finite() & u1.is_finite()).all();
+        if out_of_range {
+            return false;
+        }
+        let Some((chosen, reused)) = mixture::choose(probabilities, u_lobe) else {
+            return false;
+        };
+        let wo = frame.to_local(wo);
+        let u = [reused, clamp_random(u0), clamp_random(u1)];
+        let s = S::sample(&p, chosen, wo, u, job.mode);
+        // Settled as the chosen lobe's sampler settles it, which is also where an eval
+        // given the returned `wi` sees it (`Directions::Sampled`).
+        let mut settle = ToWorld::new(frame);
+        let wi = settle.settle(s.wi);
+        let s = Sample {
+            wi: settle.world,
+            valid: both_above(wo, wi),
+            ..s
+        };
+        let evals = S::evals(&p, wo, wi, job.mode);
+        let mut own = evals[0];
+        let (mut weight, mut probability) = (terms[0].weight, terms[0].probability);
+        for k in 1..S::LOBES {
+            let mine = chosen.eq(L::splat(k as f32));
+            own = Eval {
+                value: Rgb::select(mine, evals[k].value, own.value),
+                pdf: L::select(mine, evals[k].pdf, own.pdf),
+            };
+            weight = Rgb::select(mine, terms[k].weight, weight);
+            probability = L::select(mine, terms[k].probability, probability);
+        }
+        let s = Sample {
+            value: own.value,
+            pdf: own.pdf,
+            ..s
+        }
+        .finish();
+        let own_value = weight * s.value;
+        let (value, pdf) = mixture::sampled(
+            s.delta,
+            (own_value, s.pdf),
+            probability,
+            #[inline(always)]
+            || {
+                // Summed from zero in lobe order, the own terms in the chosen lobe's
+                // place, as the grouped path's rows are.
+                let own_pdf = probability * s.pdf;
+                let (mut value, mut pdf) = (Rgb::zero(), L::zero());
+                for k in 0..S::LOBES {
+                    let mine = chosen.eq(L::splat(k as f32));
+                    let (v, q) = (
+                        terms[k].weight * evals[k].value,
+                        terms[k].probability * evals[k].pdf,
+                    );
+                    value = value + Rgb::select(mine, own_value, v);
+                    pdf += L::select(mine, own_pdf, q);
+                }
+                (value, pdf)
+            },
+        );
+        let c = mixture::finish(&s, value, pdf);
+        store_finished(&c, chosen, &mut job.out, i, n);
+    }
+    true
 }
 
 /// One slot of a fused eval over a material batch's rows: its decoded blocks, weights
@@ -404,14 +500,16 @@ kernel!(
     eval<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_body
 );
 kernel!(
-    /// A fused shape's mixture sums over a sorted sample chunk (`mixture_body`).
-    mixture<S: Shape>(job: &mut FusedMixtureJob<'_>) => mixture_body
+    /// A fused shape's mixture sample over a job's lanes (`sample_body`); false when
+    /// some `wo` is outside [`Directions::Raw`]'s range or some random number is not
+    /// finite (outputs incomplete).
+    sample<S: Shape>(job: &mut FusedSampleJob<'_>) -> bool => sample_body
 );
 
 /// A fused eval kernel.
 pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
-/// A fused mixture kernel.
-pub type FusedMixture = fn(Kernels, &mut FusedMixtureJob<'_>);
+/// A fused mixture sample kernel.
+pub type FusedSample = fn(Kernels, &mut FusedSampleJob<'_>) -> bool;
 /// A fused eval kernel over a material batch's rows.
 pub type FusedRowsEval = fn(Kernels, &mut FusedRowsJob<'_>);
 /// [`Shape::matches`] of a shape.
@@ -428,35 +526,35 @@ type NoClearcoat = (Diffuse, Sheen, Specular);
 type NoSheen = (Diffuse, Specular, Clearcoat);
 type Plastic = (Diffuse, Specular);
 type Metal = (Specular, Clearcoat);
-const SHAPES: [(Matches, FusedEval, FusedMixture, FusedRowsEval); 5] = [
+const SHAPES: [(Matches, FusedEval, FusedSample, FusedRowsEval); 5] = [
     (
         Every::matches,
         eval::<Every>,
-        mixture::<Every>,
+        sample::<Every>,
         rows::<Every>,
     ),
     (
         NoClearcoat::matches,
         eval::<NoClearcoat>,
-        mixture::<NoClearcoat>,
+        sample::<NoClearcoat>,
         rows::<NoClearcoat>,
     ),
     (
         NoSheen::matches,
         eval::<NoSheen>,
-        mixture::<NoSheen>,
+        sample::<NoSheen>,
         rows::<NoSheen>,
     ),
     (
         Plastic::matches,
         eval::<Plastic>,
-        mixture::<Plastic>,
+        sample::<Plastic>,
         rows::<Plastic>,
     ),
     (
         Metal::matches,
         eval::<Metal>,
-        mixture::<Metal>,
+        sample::<Metal>,
         rows::<Metal>,
     ),
 ];
@@ -474,7 +572,7 @@ pub fn for_rows(models: &[Option<TypeId>]) -> Option<FusedRowsEval> {
 /// The fused kernels of a closure's shape, and its lobes as their jobs take them.
 pub struct Fused<'a> {
     pub eval: FusedEval,
-    pub mixture: FusedMixture,
+    pub sample: FusedSample,
     pub lobes: [FusedLobe<'a>; MAX_FUSED],
 }
 
@@ -489,7 +587,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
         *m = l.lobe.model();
     }
     let models = &models[..lobes.len()];
-    let &(_, eval, mixture, _) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
+    let &(_, eval, sample, _) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
     let mut out = [FusedLobe {
         params: &[],
         weight: Rgb::new(0.0, 0.0, 0.0),
@@ -505,7 +603,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
     }
     Some(Fused {
         eval,
-        mixture,
+        sample,
         lobes: out,
     })
 }

@@ -23,6 +23,7 @@ use crate::lobes::{Model, Params, Sample, ToWorld, Transport};
 use crate::math::lane::MAX_LANES;
 use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3, inv_length};
 use crate::simd::kernel;
+use mixture::ClosureSample;
 
 /// Most parameter values one lobe type may have to run in the SIMD kernels.
 pub const MAX_LOBE_PARAMS: usize = 64;
@@ -281,41 +282,53 @@ fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
             || (load_rgb(job.value, i, n), load(job.pdf, i, n, 0.0)),
         );
         let c = mixture::finish(&s, value, pdf);
-        let out = &mut job.out;
-        for (v, row) in [c.wi.x, c.wi.y, c.wi.z].into_iter().zip(out.wi.iter_mut()) {
+        let lobe = match job.lobe {
+            FinishLobe::One(k) => L::splat(k as f32),
+            FinishLobe::PerLane(chosen) => load(chosen, i, n, 0.0),
+        };
+        store_finished(&c, lobe, &mut job.out, i, n);
+    }
+}
+
+/// A closure's finished samples `c` of the `n` lanes at `i`, drawn from the lobes
+/// `lobe` (indices as lane values), stored to the outputs asked for.
+#[inline(always)]
+pub(crate) fn store_finished<L: Lane>(
+    c: &ClosureSample<L>,
+    lobe: L,
+    out: &mut FinishOutput<'_>,
+    i: usize,
+    n: usize,
+) {
+    for (v, row) in [c.wi.x, c.wi.y, c.wi.z].into_iter().zip(out.wi.iter_mut()) {
+        store(v, row, i, n);
+    }
+    store(c.pdf, out.pdf, i, n);
+    for (v, row) in c.weight.to_array().into_iter().zip(out.weight.iter_mut()) {
+        store(v, row, i, n);
+    }
+    if let Some(rows) = out.value.as_mut() {
+        for (v, row) in c.value.to_array().into_iter().zip(rows.iter_mut()) {
             store(v, row, i, n);
         }
-        store(c.pdf, out.pdf, i, n);
-        for (v, row) in c.weight.to_array().into_iter().zip(out.weight.iter_mut()) {
-            store(v, row, i, n);
-        }
-        if let Some(rows) = out.value.as_mut() {
-            for (v, row) in c.value.to_array().into_iter().zip(rows.iter_mut()) {
-                store(v, row, i, n);
-            }
-        }
-        if let Some(e) = out.eta.as_deref_mut() {
-            store(c.eta, e, i, n);
-        }
-        if let Some(r) = out.roughness.as_deref_mut() {
-            store(c.roughness, r, i, n);
-        }
-        if let Some(f) = out.flags.as_deref_mut() {
-            f[i..i + n].copy_from_slice(&mixture::flags(&c)[..n]);
-        }
-        if let Some(k) = out.component.as_deref_mut() {
-            k[i..i + n].copy_from_slice(&mixture::components(&c)[..n]);
-        }
-        if let Some(l) = out.lobe.as_deref_mut() {
-            let mut ok = [0.0f32; MAX_LANES];
-            L::select(c.ok, L::one(), L::zero()).store(&mut ok);
-            for (j, (l, &ok)) in l[i..i + n].iter_mut().zip(&ok).enumerate() {
-                let lobe = match job.lobe {
-                    FinishLobe::One(k) => k,
-                    FinishLobe::PerLane(chosen) => chosen[i + j] as u32,
-                };
-                *l = if ok != 0.0 { lobe } else { 0 };
-            }
+    }
+    if let Some(e) = out.eta.as_deref_mut() {
+        store(c.eta, e, i, n);
+    }
+    if let Some(r) = out.roughness.as_deref_mut() {
+        store(c.roughness, r, i, n);
+    }
+    if let Some(f) = out.flags.as_deref_mut() {
+        f[i..i + n].copy_from_slice(&mixture::flags(c)[..n]);
+    }
+    if let Some(k) = out.component.as_deref_mut() {
+        k[i..i + n].copy_from_slice(&mixture::components(c)[..n]);
+    }
+    if let Some(l) = out.lobe.as_deref_mut() {
+        let mut lanes = [0.0f32; MAX_LANES];
+        L::select(c.ok, lobe, L::zero()).store(&mut lanes);
+        for (l, &k) in l[i..i + n].iter_mut().zip(&lanes) {
+            *l = k as u32;
         }
     }
 }

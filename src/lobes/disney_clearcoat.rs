@@ -79,6 +79,7 @@ impl Model for DisneyClearcoat {
         },
     ];
 
+    const VALID_ABOVE: bool = true;
     type Prepared<L: Lane> = Prepared<L>;
 
     /// Table of f64 quadratures, interpolated: measured in
@@ -152,7 +153,8 @@ impl Model for DisneyClearcoat {
             wi,
             value: e.value,
             pdf: e.pdf,
-            valid: both_above(wo, wi) & e.pdf.gt(L::zero()),
+            // A zero pdf fails in `Sample::finish` ([`Model::VALID_ABOVE`]).
+            valid: both_above(wo, wi),
             transmitted: L::Mask::splat(false),
             delta: L::Mask::splat(false),
             eta: L::one(),

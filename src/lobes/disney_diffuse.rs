@@ -200,6 +200,7 @@ impl Model for DisneyDiffuse {
         },
     ];
 
+    const VALID_ABOVE: bool = true;
     type Prepared<L: Lane> = Prepared<L>;
 
     /// Closed form (and Gauss-Legendre) in f32: measured worst relative error 4.3e-7

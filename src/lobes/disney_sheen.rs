@@ -87,6 +87,7 @@ impl Model for DisneySheen {
         },
     ];
 
+    const VALID_ABOVE: bool = true;
     type Prepared<L: Lane> = Prepared<L>;
 
     /// Polynomial fit: measured worst relative error 8.9e-6 (module docs).

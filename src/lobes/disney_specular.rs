@@ -118,6 +118,7 @@ impl Model for DisneySpecular {
         },
     ];
 
+    const VALID_ABOVE: bool = true;
     type Prepared<L: Lane> = Prepared<L>;
 
     /// Tables of f64 quadratures, interpolated; measured against slope-space quadrature
@@ -207,7 +208,8 @@ impl Model for DisneySpecular {
             wi,
             value: e.value,
             pdf: e.pdf,
-            valid: both_above(wo, wi) & e.pdf.gt(L::zero()),
+            // A zero pdf fails in `Sample::finish` ([`Model::VALID_ABOVE`]).
+            valid: both_above(wo, wi),
             transmitted: L::Mask::splat(false),
             delta: L::Mask::splat(false),
             eta: L::one(),

@@ -138,6 +138,23 @@ impl<L: Lane> Sample<L> {
         self
     }
 
+    /// `a` in the lanes of `mask`, `b` elsewhere.
+    #[inline(always)]
+    pub fn select(mask: L::Mask, a: Self, b: Self) -> Self {
+        Sample {
+            wi: Vec3::select(mask, a.wi, b.wi),
+            value: Rgb::select(mask, a.value, b.value),
+            pdf: L::select(mask, a.pdf, b.pdf),
+            valid: (mask & a.valid) | (!mask & b.valid),
+            transmitted: (mask & a.transmitted) | (!mask & b.transmitted),
+            delta: (mask & a.delta) | (!mask & b.delta),
+            eta: L::select(mask, a.eta, b.eta),
+            roughness: L::select(mask, a.roughness, b.roughness),
+            class: L::select(mask, a.class, b.class),
+            component: L::select(mask, a.component, b.component),
+        }
+    }
+
     /// `value / pdf`, 0 where the sample failed.
     #[inline(always)]
     pub fn weight(&self) -> Rgb<L> {
@@ -333,6 +350,11 @@ pub trait Model: Send + Sync + 'static {
     /// Read a decoded block ([`Model::decode`]) into lanes.
     fn prepare<L: Lane>(decoded: Params<'_, L>) -> Self::Prepared<L>;
     fn eval<L: Lane>(p: &Self::Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, mode: Transport) -> Eval<L>;
+    /// Whether a sample's `valid` is exactly [`both_above`] at the settled direction,
+    /// and what it returns besides `wi`, value and pdf does not depend on that
+    /// direction: a fused mixture sample (`kernels::fused`) then samples each lobe in
+    /// place and settles only the direction each lane keeps. Default: false.
+    const VALID_ABOVE: bool = false;
     /// `uc` chooses among discrete events (reflect or refract); `u0`, `u1` pick the
     /// direction. The sampled direction goes through `settle` before anything is
     /// computed from it: value, pdf and validity are those of the settled direction,
