@@ -59,12 +59,14 @@ impl<L: Lane> Ndf<L> for Gtr1<L> {
 
     #[inline(always)]
     fn sample(&self, _w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
-        // t = (a^2)^(-u1) in [1, 1 / a^2].
-        let t = (-(u1 * self.ln_a2)).exp();
+        // t = (a^2)^(-u0) in [1, 1 / a^2]; the azimuth from u1, as the other
+        // distributions and the cosine hemisphere take it, so that a fused sample
+        // computes one `sin_cos` for every lobe.
+        let t = (-(u0 * self.ln_a2)).exp();
         let sin2 = (self.a2 * (t - L::one()) * self.inv_one_minus_a2).clamp(L::zero(), L::one());
         let cos2 = ((L::one() - self.a2 * t) * self.inv_one_minus_a2).max(L::zero());
         let sin_m = sin2.sqrt();
-        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u0).sin_cos();
+        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
         Vec3::new(sin_m * cos_phi, sin_m * sin_phi, cos2.sqrt())
     }
 
