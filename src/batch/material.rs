@@ -26,7 +26,7 @@ use super::{
 use crate::closure::{SampleResult, check_randoms};
 use crate::error::{Error, Status};
 use crate::kernels::expand::{ExpandEval, ExpandJob};
-use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, OwnRows};
+use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, RowsSample};
 use crate::kernels::material_rows::{self, ChooseJob};
 use crate::kernels::{
     AlbedoJob, Directions, EvalJob, FinishJob, FinishLobe, LANE_MULTIPLE, LobeLanes, SampleJob,
@@ -494,21 +494,26 @@ fn eval_chunk(
     }
 }
 
-/// A sample's mixture sums in one kernel when the live slots' lobes, in order, are one
-/// of the fused shapes (`kernels::fused::rows`, with `own = (chosen, value, p pdf)`:
-/// the sums `sample_chunk` otherwise adds up slot by slot, the same bits); false, and
-/// nothing written, when they are not.
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
-fn mixture_fused(
-    kernels: Kernels,
-    material: &Material,
-    rows: &SlotRows,
-    len: usize,
-    (wo, wi): (&[Vec<f32>; 3], &[Vec<f32>; 3]),
-    (chosen, own_value, own_pdf): (&[f32], [&[f32]; 3], &[f32]),
-    value: Option<[&mut [f32]; 3]>,
-    pdf: &mut [f32],
-) -> bool {
+/// A staged chunk's samples ([`stage_sample`]) in one kernel when the live slots'
+/// lobes, in order, are one of the fused shapes (`kernels::fused::rows`): the rows
+/// [`sample_slot_by_slot`] fills, the same bits. False, and nothing written, when they
+/// are not.
+fn sample_fused(kernels: Kernels, material: &Material, len: usize, s: &mut Scratch) -> bool {
+    let Scratch {
+        material: rows,
+        wo,
+        wi,
+        u,
+        value,
+        pdf,
+        sample_value,
+        sample_pdf,
+        eta,
+        roughness,
+        events,
+        chosen,
+        ..
+    } = s;
     let empty = FusedRows {
         params: &[],
         param_count: 0,
@@ -516,7 +521,7 @@ fn mixture_fused(
         probability: &[],
     };
     let (mut models, mut slots, mut n) = ([None; MAX_FUSED], [empty; MAX_FUSED], 0);
-    let mut indices = [0.0; MAX_FUSED];
+    let mut labels = [0.0; MAX_FUSED];
     for (k, (_, lobe)) in material.slots().iter().enumerate() {
         if !rows.live[k] {
             continue;
@@ -526,12 +531,13 @@ fn mixture_fused(
         }
         models[n] = lobe.model();
         slots[n] = rows.slot(k, lobe.lane_decoded_len(), len);
-        indices[n] = k as f32;
+        labels[n] = k as f32;
         n += 1;
     }
     let Some(kernel) = fused::for_rows(&models[..n]) else {
         return false;
     };
+    let [sv_r, sv_g, sv_b] = sample_value;
     kernel(
         kernels,
         &mut FusedRowsJob {
@@ -539,17 +545,20 @@ fn mixture_fused(
             mode: Transport::Radiance,
             frame: &rows.frame[..9 * len],
             wo: view3(wo, len),
-            wi: view3(wi, len),
-            directions: Directions::Sampled,
+            u: view3(u, len),
             slots,
-            own: OwnRows {
-                chosen: &chosen[..len],
-                slots: indices,
-                value: own_value,
-                pdf: &own_pdf[..len],
+            labels,
+            chosen: &chosen[..len],
+            out: RowsSample {
+                wi: rows3(wi, len),
+                own_value: [grow(sv_r, len), grow(sv_g, len), grow(sv_b, len)],
+                own_pdf: grow(sample_pdf, len),
+                eta: grow(eta, len),
+                roughness: grow(roughness, len),
+                events: grow(events, len),
+                value: rows3(value, len),
+                pdf: grow(pdf, len),
             },
-            value,
-            pdf: &mut pdf[..len],
         },
     );
     true
@@ -884,18 +893,17 @@ fn split_rows<const N: usize>(v: &mut [f32], stride: usize) -> [&mut [f32]; N] {
     })
 }
 
-#[allow(clippy::too_many_arguments)]
-fn sample_chunk(
+/// Stage a sample's chunk (`stage_chunk`), its random numbers and each lane's chosen
+/// slot.
+fn stage_sample(
     kernels: Kernels,
     input: &MaterialInput<'_>,
     u: &SampleRandoms<'_>,
     lanes: &[u32],
-    base: usize,
+    len: usize,
     s: &mut Scratch,
     failure: &mut LaneError,
-    out: &mut SampleOutput<'_>,
 ) -> Result<(), Error> {
-    let len = padded(lanes.len());
     let n = lanes.len();
     stage_chunk(kernels, input, lanes, len, s, failure, None)?;
     let slots = input.material.slots();
@@ -935,6 +943,59 @@ fn sample_chunk(
             chosen: grow(&mut s.chosen, len),
         },
     );
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn sample_chunk(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    u: &SampleRandoms<'_>,
+    lanes: &[u32],
+    base: usize,
+    s: &mut Scratch,
+    failure: &mut LaneError,
+    out: &mut SampleOutput<'_>,
+) -> Result<(), Error> {
+    let len = padded(lanes.len());
+    let n = lanes.len();
+    stage_sample(kernels, input, u, lanes, len, s, failure)?;
+    if !sample_fused(kernels, input.material, len, s) {
+        sample_slot_by_slot(kernels, input.material, len, n, s)?;
+    }
+    // `sample_pdf` holds `p_k pdf_k` now: the chosen slot's probability is 1 below.
+    let first = lanes[0] as usize - base;
+    if lanes[n - 1] as usize - lanes[0] as usize + 1 == n {
+        finish_in_place(kernels, s, first..first + n, out);
+        if s.any_failed {
+            for (&lane, _) in lanes.iter().zip(&s.failed).filter(|&(_, &f)| f != 0) {
+                out.write(lane as usize - base, &SampleResult::FAILED);
+            }
+        }
+    } else {
+        for (j, &lane) in lanes.iter().enumerate() {
+            let r = if s.failed[j] != 0 {
+                SampleResult::FAILED
+            } else {
+                finish_lane(s, j, s.chosen[j] as usize, 1.0, true)
+            };
+            out.write(lane as usize - base, &r);
+        }
+    }
+    Ok(())
+}
+
+/// A chunk's samples when its slots are not a fused shape: each chosen slot samples
+/// its own lanes, sorted into runs by slot ([`sample_sorted`]), and the mixture is
+/// summed slot by slot.
+fn sample_slot_by_slot(
+    kernels: Kernels,
+    material: &Material,
+    len: usize,
+    n: usize,
+    s: &mut Scratch,
+) -> Result<(), Error> {
+    let slots = material.slots();
     let Scratch {
         material: rows,
         wo,
@@ -985,71 +1046,42 @@ fn sample_chunk(
         &mut sample_pdf[..len],
     );
     // The mixture summed in slot order, as `Closure::sample` sums it: each slot
-    // evaluated on the lanes that chose another, then its own samples added; in one
-    // kernel when the slots are a fused shape.
-    let own = (chosen, view3(sample_value, len), &sample_pdf[..len]);
+    // evaluated on the lanes that chose another, then its own samples added.
     let mut value = rows3(value, len);
     let pdf = grow(pdf, len);
-    let fused = {
-        let [vr, vg, vb] = &mut value;
-        let value = Some([&mut vr[..], &mut vg[..], &mut vb[..]]);
-        let (material, directions) = (input.material, (&*wo, &*wi));
-        mixture_fused(kernels, material, rows, len, directions, own, value, pdf)
-    };
-    if !fused {
-        for row in value.iter_mut() {
-            row.fill(0.0);
-        }
-        pdf.fill(0.0);
-        for (k, (_, lobe)) in slots.iter().enumerate() {
-            let slot = k as f32;
-            if rows.live[k] && picks[k] < n {
-                let [vr, vg, vb] = &mut value;
-                let mut job = EvalJob {
-                    len,
-                    mode: Transport::Radiance,
-                    directions: Directions::Sampled,
-                    wo: view3(wo, len),
-                    wi: view3(wi, len),
-                    lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-                    store: false,
-                    value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
-                    pdf: &mut pdf[..],
-                    except: Some((chosen, slot)),
-                    out_of_range: false,
-                };
-                lobe.eval_lanes(kernels, &mut job);
-            }
-            if picks[k] > 0 {
-                material_rows::add_own(
-                    kernels,
-                    slot,
-                    chosen,
-                    view3(sample_value, len),
-                    &sample_pdf[..len],
-                    &mut value,
-                    pdf,
-                );
-            }
-        }
+    for row in value.iter_mut() {
+        row.fill(0.0);
     }
-    // `sample_pdf` holds `p_k pdf_k` now: the chosen slot's probability is 1 below.
-    let first = lanes[0] as usize - base;
-    if lanes[n - 1] as usize - lanes[0] as usize + 1 == n {
-        finish_in_place(kernels, s, first..first + n, out);
-        if s.any_failed {
-            for (&lane, _) in lanes.iter().zip(&s.failed).filter(|&(_, &f)| f != 0) {
-                out.write(lane as usize - base, &SampleResult::FAILED);
-            }
-        }
-    } else {
-        for (j, &lane) in lanes.iter().enumerate() {
-            let r = if s.failed[j] != 0 {
-                SampleResult::FAILED
-            } else {
-                finish_lane(s, j, s.chosen[j] as usize, 1.0, true)
+    pdf.fill(0.0);
+    for (k, (_, lobe)) in slots.iter().enumerate() {
+        let slot = k as f32;
+        if rows.live[k] && picks[k] < n {
+            let [vr, vg, vb] = &mut value;
+            let mut job = EvalJob {
+                len,
+                mode: Transport::Radiance,
+                directions: Directions::Sampled,
+                wo: view3(wo, len),
+                wi: view3(wi, len),
+                lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
+                store: false,
+                value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
+                pdf: &mut pdf[..],
+                except: Some((chosen, slot)),
+                out_of_range: false,
             };
-            out.write(lane as usize - base, &r);
+            lobe.eval_lanes(kernels, &mut job);
+        }
+        if picks[k] > 0 {
+            material_rows::add_own(
+                kernels,
+                slot,
+                chosen,
+                view3(sample_value, len),
+                &sample_pdf[..len],
+                &mut value,
+                pdf,
+            );
         }
     }
     Ok(())
@@ -1074,4 +1106,119 @@ fn finish_in_place(kernels: Kernels, s: &Scratch, local: Range<usize>, out: &mut
         out: out.finish_rows(&local),
     };
     finish_mixture(kernels, &mut job);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::registry::Registry;
+
+    /// A small xorshift generator in [0, 1).
+    fn randoms(seed: u32, n: usize) -> Vec<f32> {
+        let mut state = seed;
+        (0..n)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 17;
+                state ^= state << 5;
+                (state >> 8) as f32 / (1u32 << 24) as f32
+            })
+            .collect()
+    }
+
+    /// `sample_fused` fills every row `sample_slot_by_slot` fills with the same bits,
+    /// for each set of slots the disney material emits (one with the clearcoat on some
+    /// lanes only), per-lane roughness, frames and views on both hemispheres, on every
+    /// kernel set.
+    #[test]
+    fn fused_samples_are_the_slot_by_slot_rows() {
+        let shapes = [
+            r#"{"material": "disney", "sheen": 1, "clearcoat": 1, "subsurface": 0.5, "anisotropic": 0.4}"#,
+            r#"{"material": "disney", "sheen": 0.7, "clearcoat": 0}"#,
+            r#"{"material": "disney", "sheen": 0, "clearcoat": 0.8, "clearcoat_gloss": 0.3}"#,
+            r#"{"material": "disney", "sheen": 0, "clearcoat": 0, "roughness": 0}"#,
+            r#"{"material": "disney", "metallic": 1, "clearcoat": 1}"#,
+        ];
+        let registry = Registry::with_builtins();
+        let n = 203;
+        for (shape, description) in shapes.iter().enumerate() {
+            let material = crate::json::material_from_json(&registry, description, 0.001).unwrap();
+            let seed = 0x5eed + shape as u32;
+            let unit = |k: u32| -> [Vec<f32>; 3] {
+                let [x, y, z] = [0, 1, 2].map(|c| randoms(seed * 7 + k * 3 + c, n));
+                let units =
+                    (0..n).map(|j| Vec3::new(x[j] - 0.5, y[j] - 0.5, z[j] - 0.5).normalize());
+                let (mut x, mut y, mut z) = (vec![], vec![], vec![]);
+                for d in units {
+                    x.push(d.x);
+                    y.push(d.y);
+                    z.push(d.z);
+                }
+                [x, y, z]
+            };
+            let (wo, normal, tangent) = (unit(1), unit(2), unit(3));
+            fn soa(r: &[Vec<f32>; 3]) -> Soa3<'_> {
+                let [x, y, z] = r.each_ref().map(|v| &v[..]);
+                Soa3 { x, y, z }
+            }
+            let roughness = randoms(seed + 11, n);
+            let coat: Vec<f32> = (0..n).map(|j| (j % 3 / 2) as f32).collect();
+            let mut overrides = vec![OverrideLanes {
+                param: 5,
+                kind: ParamKind::Float,
+                value: [&roughness, &[], &[]],
+            }];
+            if shape == 1 {
+                overrides.push(OverrideLanes {
+                    param: 9,
+                    kind: ParamKind::Float,
+                    value: [&coat, &[], &[]],
+                });
+            }
+            let input = MaterialInput {
+                count: n,
+                material: &material,
+                active: None,
+                wo: soa(&wo),
+                normal: soa(&normal),
+                tangent: Some(soa(&tangent)),
+                overrides: &overrides,
+            };
+            let u = [0, 1, 2].map(|c| randoms(seed + 20 + c, n));
+            let u = SampleRandoms {
+                u_lobe: &u[0],
+                u0: &u[1],
+                u1: &u[2],
+            };
+            let lanes: Vec<u32> = (0..n as u32).collect();
+            let len = padded(n);
+            for kernels in Kernels::available() {
+                let [mut fused, mut by_slot] = [Scratch::default(), Scratch::default()];
+                for s in [&mut fused, &mut by_slot] {
+                    s.reserve_rows(len).unwrap();
+                    let mut failure = LaneError::default();
+                    stage_sample(kernels, &input, &u, &lanes, len, s, &mut failure).unwrap();
+                    assert!(failure.take().is_none());
+                }
+                assert!(sample_fused(kernels, &material, len, &mut fused));
+                sample_slot_by_slot(kernels, &material, len, n, &mut by_slot).unwrap();
+                let rows = |s: &Scratch| -> Vec<Vec<u32>> {
+                    let [a, b, c] = &s.wi;
+                    let [d, e, f] = &s.sample_value;
+                    let [g, h, i] = &s.value;
+                    [a, b, c, d, e, f, g, h, i]
+                        .into_iter()
+                        .chain([&s.sample_pdf, &s.eta, &s.roughness, &s.events, &s.pdf])
+                        .map(|row| row[..n].iter().map(|v| v.to_bits()).collect())
+                        .collect()
+                };
+                let what = format!("{description} on {}", kernels.isa().name());
+                for (k, (a, b)) in rows(&fused).iter().zip(rows(&by_slot)).enumerate() {
+                    let lane = a.iter().zip(&b).position(|(a, b)| a != b);
+                    assert!(lane.is_none(), "row {k}, lane {lane:?}: {what}");
+                }
+                assert!(fused.pdf[..n].iter().filter(|&&p| p > 0.0).count() > n / 4);
+            }
+        }
+    }
 }

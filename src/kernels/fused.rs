@@ -10,7 +10,7 @@
 
 use super::mixture::{self, clamp_random};
 use super::{
-    Directions, FinishOutput, MAX_LOBE_PARAMS, direction, load, load_frame, load_rgb, rgb_at,
+    Directions, FinishOutput, MAX_LOBE_PARAMS, direction, load, load_frame, pack_events, rgb_at,
     store, store_finished,
 };
 use crate::closure::Closure;
@@ -84,25 +84,12 @@ pub trait Shape: 'static {
         wi: Vec3<L>,
         mode: Transport,
     ) -> (Rgb<L>, L);
-    /// A mixture at each lane's own sample: lobe `k`'s terms stand where `chosen`
-    /// equals `slots[k]`, the others are evaluated; summed from zero in lobe order.
-    #[allow(clippy::too_many_arguments)]
-    fn sum_per_lane<L: Lane>(
-        p: &Self::Prepared<L>,
-        terms: &[Term<L>; MAX_FUSED],
-        chosen: (L, &[f32; MAX_FUSED]),
-        own_value: Rgb<L>,
-        own_pdf: L,
-        wo: Vec3<L>,
-        wi: Vec3<L>,
-        mode: Transport,
-    ) -> (Rgb<L>, L);
-    /// Each lane's sample of lobe `chosen` (an index as a lane value), in the local
-    /// frame and not yet settled: its `valid`, value and pdf are not read (each model
-    /// is [`Model::VALID_ABOVE`]).
+    /// Each lane's sample of its chosen lobe (lobe `k` where `chosen` equals
+    /// `labels[k]`), in the local frame and not yet settled: its `valid`, value and pdf
+    /// are not read (each model is [`Model::VALID_ABOVE`]).
     fn sample<L: Lane>(
         p: &Self::Prepared<L>,
-        chosen: L,
+        chosen: (L, &[f32; MAX_FUSED]),
         wo: Vec3<L>,
         u: [L; 3],
         mode: Transport,
@@ -189,36 +176,9 @@ macro_rules! shape {
             }
             #[inline(always)]
             #[allow(non_snake_case)]
-            fn sum_per_lane<L: Lane>(
-                p: &Self::Prepared<L>,
-                terms: &[Term<L>; MAX_FUSED],
-                (chosen, slots): (L, &[f32; MAX_FUSED]),
-                own_value: Rgb<L>,
-                own_pdf: L,
-                wo: Vec3<L>,
-                wi: Vec3<L>,
-                mode: Transport,
-            ) -> (Rgb<L>, L) {
-                let ($first, $($m,)*) = p;
-                let mine = chosen.eq(L::splat(slots[0]));
-                let (v, q) = weighted::<$first, L>($first, &terms[0], wo, wi, mode);
-                let mut value = Rgb::zero() + Rgb::select(mine, own_value, v);
-                let mut pdf = L::zero() + L::select(mine, own_pdf, q);
-                let mut k = 0;
-                $(
-                    k += 1;
-                    let mine = chosen.eq(L::splat(slots[k]));
-                    let (v, q) = weighted::<$m, L>($m, &terms[k], wo, wi, mode);
-                    value = value + Rgb::select(mine, own_value, v);
-                    pdf += L::select(mine, own_pdf, q);
-                )*
-                (value, pdf)
-            }
-            #[inline(always)]
-            #[allow(non_snake_case)]
             fn sample<L: Lane>(
                 p: &Self::Prepared<L>,
-                chosen: L,
+                (chosen, labels): (L, &[f32; MAX_FUSED]),
                 wo: Vec3<L>,
                 [uc, u0, u1]: [L; 3],
                 mode: Transport,
@@ -232,7 +192,7 @@ macro_rules! shape {
                 $(
                     k += 1;
                     let t = $m::sample($m, wo, uc, u0, u1, mode, &mut InPlace);
-                    s = Sample::select(chosen.eq(L::splat(k as f32)), t, s);
+                    s = Sample::select(chosen.eq(L::splat(labels[k])), t, s);
                 )*
                 s
             }
@@ -309,6 +269,83 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
     true
 }
 
+/// A closure's lobe indices as [`Shape::sample`]'s labels.
+const LOBE_LABELS: [f32; MAX_FUSED] = [0.0, 1.0, 2.0, 3.0];
+
+/// One register of a fused mixture sample ([`sample_register`]).
+struct RegisterSample<L: Lane> {
+    /// The chosen lobe's sample, `wi` in world space, finished (`Sample::finish`).
+    sample: Sample<L>,
+    /// Its `weight * value` and `p * pdf`.
+    own_value: Rgb<L>,
+    own_pdf: L,
+    /// The mixture's value and `sum p_k pdf_k` at `wi`.
+    value: Rgb<L>,
+    pdf: L,
+}
+
+/// Each lane samples its chosen lobe (`chosen` as [`Shape::sample`]) from the local
+/// `wo` in `frame`; the direction is settled as the lobe's sampler settles it, which
+/// is where an eval given the returned `wi` sees it (`Directions::Sampled`), and every
+/// lobe is evaluated there, the chosen one giving the sample its own value and pdf as
+/// its sampler computes them. The mixture is summed from zero in lobe order with the
+/// own terms in the chosen lobe's place, as the grouped paths' rows are: their bits.
+#[inline(always)]
+fn sample_register<S: Shape, L: Lane>(
+    p: &S::Prepared<L>,
+    terms: &[Term<L>; MAX_FUSED],
+    (chosen, labels): (L, &[f32; MAX_FUSED]),
+    (frame, wo): (LaneFrame<L>, Vec3<L>),
+    u: [L; 3],
+    mode: Transport,
+) -> RegisterSample<L> {
+    let s = S::sample(p, (chosen, labels), wo, u, mode);
+    let mut settle = ToWorld::new(frame);
+    let wi = settle.settle(s.wi);
+    let s = Sample {
+        wi: settle.world,
+        valid: both_above(wo, wi),
+        ..s
+    };
+    let evals = S::evals(p, wo, wi, mode);
+    let mut own = evals[0];
+    let (mut weight, mut probability) = (terms[0].weight, terms[0].probability);
+    for k in 1..S::LOBES {
+        let mine = chosen.eq(L::splat(labels[k]));
+        own = Eval {
+            value: Rgb::select(mine, evals[k].value, own.value),
+            pdf: L::select(mine, evals[k].pdf, own.pdf),
+        };
+        weight = Rgb::select(mine, terms[k].weight, weight);
+        probability = L::select(mine, terms[k].probability, probability);
+    }
+    let sample = Sample {
+        value: own.value,
+        pdf: own.pdf,
+        ..s
+    }
+    .finish();
+    let own_value = weight * sample.value;
+    let own_pdf = probability * sample.pdf;
+    let (mut value, mut pdf) = (Rgb::zero(), L::zero());
+    for k in 0..S::LOBES {
+        let mine = chosen.eq(L::splat(labels[k]));
+        let (v, q) = (
+            terms[k].weight * evals[k].value,
+            terms[k].probability * evals[k].pdf,
+        );
+        value = value + Rgb::select(mine, own_value, v);
+        pdf += L::select(mine, own_pdf, q);
+    }
+    RegisterSample {
+        sample,
+        own_value,
+        own_pdf,
+        value,
+        pdf,
+    }
+}
+
 /// A mixture sample over the caller's rows, each register sampled, evaluated and
 /// finished in one pass (no grouping of lanes by lobe): every lobe samples each lane
 /// and the lane keeps its chosen lobe's direction; every lobe is evaluated there, the
@@ -352,60 +389,17 @@ fn sample_body<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
         let Some((chosen, reused)) = mixture::choose(probabilities, u_lobe) else {
             return false;
         };
-        let wo = frame.to_local(wo);
         let u = [reused, clamp_random(u0), clamp_random(u1)];
-        let s = S::sample(&p, chosen, wo, u, job.mode);
-        // Settled as the chosen lobe's sampler settles it, which is also where an eval
-        // given the returned `wi` sees it (`Directions::Sampled`).
-        let mut settle = ToWorld::new(frame);
-        let wi = settle.settle(s.wi);
-        let s = Sample {
-            wi: settle.world,
-            valid: both_above(wo, wi),
-            ..s
-        };
-        let evals = S::evals(&p, wo, wi, job.mode);
-        let mut own = evals[0];
-        let (mut weight, mut probability) = (terms[0].weight, terms[0].probability);
-        for k in 1..S::LOBES {
-            let mine = chosen.eq(L::splat(k as f32));
-            own = Eval {
-                value: Rgb::select(mine, evals[k].value, own.value),
-                pdf: L::select(mine, evals[k].pdf, own.pdf),
-            };
-            weight = Rgb::select(mine, terms[k].weight, weight);
-            probability = L::select(mine, terms[k].probability, probability);
-        }
-        let s = Sample {
-            value: own.value,
-            pdf: own.pdf,
-            ..s
-        }
-        .finish();
-        let own_value = weight * s.value;
+        let at = (frame, frame.to_local(wo));
+        let r = sample_register::<S, L>(&p, &terms, (chosen, &LOBE_LABELS), at, u, job.mode);
         let (value, pdf) = mixture::sampled(
-            s.delta,
-            (own_value, s.pdf),
-            probability,
+            r.sample.delta,
+            (r.own_value, r.own_pdf),
+            L::one(),
             #[inline(always)]
-            || {
-                // Summed from zero in lobe order, the own terms in the chosen lobe's
-                // place, as the grouped path's rows are.
-                let own_pdf = probability * s.pdf;
-                let (mut value, mut pdf) = (Rgb::zero(), L::zero());
-                for k in 0..S::LOBES {
-                    let mine = chosen.eq(L::splat(k as f32));
-                    let (v, q) = (
-                        terms[k].weight * evals[k].value,
-                        terms[k].probability * evals[k].pdf,
-                    );
-                    value = value + Rgb::select(mine, own_value, v);
-                    pdf += L::select(mine, own_pdf, q);
-                }
-                (value, pdf)
-            },
+            || (r.value, r.pdf),
         );
-        let c = mixture::finish(&s, value, pdf);
+        let c = mixture::finish(&r.sample, value, pdf);
         store_finished(&c, chosen, &mut job.out, i, n);
     }
     true
@@ -421,35 +415,40 @@ pub struct FusedRows<'a> {
     pub probability: &'a [f32],
 }
 
-/// A material batch sample's mixture sums over its staged rows (`len` a multiple of
-/// [`super::LANE_MULTIPLE`]): what each slot's eval kernel over `LobeLanes::PerLane`
-/// computes and adds on the lanes that chose another slot, with each lane's own
-/// sample in its chosen slot's place, in one pass.
+/// A material batch's samples over its staged rows (`len` a multiple of
+/// [`super::LANE_MULTIPLE`]), in one pass: each lane samples its chosen slot and every
+/// slot is evaluated there ([`sample_register`]). The rows are what each slot's sample
+/// kernel over its lanes and the mixture's evals write, the same bits.
 pub struct FusedRowsJob<'a> {
     pub len: usize,
     pub mode: Transport,
     /// Each lane's frame: tangent, bitangent, normal, component `c` of axis `a` of lane
     /// `j` at `(3 a + c) len + j`.
     pub frame: &'a [f32],
-    /// World space: `wo` unit, `wi` as `directions` says.
+    /// Unit `wo` (world space), and the random numbers: the lobe choice rescaled
+    /// within the chosen slot's bin, then the direction's two dimensions.
     pub wo: [&'a [f32]; 3],
-    pub wi: [&'a [f32]; 3],
-    pub directions: Directions,
-    /// The emitted slots in order (as many as the shape has).
+    pub u: [&'a [f32]; 3],
+    /// The live slots in order (as many as the shape has), and their slot indices.
     pub slots: [FusedRows<'a>; MAX_FUSED],
-    /// The samples' own terms: each lane's chosen slot, the slot index of each lobe
-    /// of the shape, and the chosen slot's weighted value and `p pdf`.
-    pub own: OwnRows<'a>,
-    pub value: Option<[&'a mut [f32]; 3]>,
-    pub pdf: &'a mut [f32],
+    pub labels: [f32; MAX_FUSED],
+    /// Each lane's chosen slot index.
+    pub chosen: &'a [f32],
+    pub out: RowsSample<'a>,
 }
 
-/// The own terms of a material batch's samples ([`FusedRowsJob::own`]).
-pub struct OwnRows<'a> {
-    pub chosen: &'a [f32],
-    pub slots: [f32; MAX_FUSED],
-    pub value: [&'a [f32]; 3],
-    pub pdf: &'a [f32],
+/// The rows a [`FusedRowsJob`] writes: the chosen slot's sample (`wi` in world space,
+/// `weight * value`, `p * pdf`, eta, roughness, packed events) and the mixture's
+/// value and pdf there.
+pub struct RowsSample<'a> {
+    pub wi: [&'a mut [f32]; 3],
+    pub own_value: [&'a mut [f32]; 3],
+    pub own_pdf: &'a mut [f32],
+    pub eta: &'a mut [f32],
+    pub roughness: &'a mut [f32],
+    pub events: &'a mut [f32],
+    pub value: [&'a mut [f32]; 3],
+    pub pdf: &'a mut [f32],
 }
 
 #[inline(always)]
@@ -479,19 +478,39 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
         let p = S::prepare::<L>(&params);
         let frame = load_frame::<L>(job.frame, len, i);
         let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
-        let wi = direction(job.wi, i, L::LANES, job.directions, &mut unused);
-        let (wo, wi) = (frame.to_local(wo), frame.to_local(wi));
-        let own = &job.own;
-        let own_value = load_rgb(own.value, i, L::LANES);
-        let chosen = (L::load(&own.chosen[i..]), &own.slots);
-        let own_pdf = L::load(&own.pdf[i..]);
-        let sums = S::sum_per_lane(&p, &terms, chosen, own_value, own_pdf, wo, wi, job.mode);
-        store_sums(sums, &mut job.value, job.pdf, i, L::LANES);
+        let u = [0, 1, 2].map(
+            #[inline(always)]
+            |r| clamp_random(L::load(&job.u[r][i..])),
+        );
+        let chosen = (L::load(&job.chosen[i..]), &job.labels);
+        let at = (frame, frame.to_local(wo));
+        let r = sample_register::<S, L>(&p, &terms, chosen, at, u, job.mode);
+        let out = &mut job.out;
+        let s = &r.sample;
+        for (v, row) in [s.wi.x, s.wi.y, s.wi.z].into_iter().zip(out.wi.iter_mut()) {
+            v.store(&mut row[i..]);
+        }
+        for (v, row) in r
+            .own_value
+            .to_array()
+            .into_iter()
+            .zip(out.own_value.iter_mut())
+        {
+            v.store(&mut row[i..]);
+        }
+        for (v, row) in r.value.to_array().into_iter().zip(out.value.iter_mut()) {
+            v.store(&mut row[i..]);
+        }
+        r.own_pdf.store(&mut out.own_pdf[i..]);
+        r.pdf.store(&mut out.pdf[i..]);
+        s.eta.store(&mut out.eta[i..]);
+        s.roughness.store(&mut out.roughness[i..]);
+        pack_events(s).store(&mut out.events[i..]);
     }
 }
 
 kernel!(
-    /// A fused shape's mixture sums over a material batch sample's rows (`rows_body`).
+    /// A fused shape's sample over a material batch's rows (`rows_body`).
     rows<S: Shape>(job: &mut FusedRowsJob<'_>) => rows_body
 );
 kernel!(
@@ -510,7 +529,7 @@ kernel!(
 pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
 /// A fused mixture sample kernel.
 pub type FusedSample = fn(Kernels, &mut FusedSampleJob<'_>) -> bool;
-/// A fused eval kernel over a material batch's rows.
+/// A fused sample kernel over a material batch's rows.
 pub type FusedRowsEval = fn(Kernels, &mut FusedRowsJob<'_>);
 /// [`Shape::matches`] of a shape.
 type Matches = fn(&[Option<TypeId>]) -> bool;
@@ -559,7 +578,7 @@ const SHAPES: [(Matches, FusedEval, FusedSample, FusedRowsEval); 5] = [
     ),
 ];
 
-/// The fused eval over rows of the slots whose built-in models are `models`, in order,
+/// The fused sample over rows of the slots whose built-in models are `models`, in order,
 /// when they are a shape.
 pub fn for_rows(models: &[Option<TypeId>]) -> Option<FusedRowsEval> {
     if models.len() < 2 || models.len() > MAX_FUSED {
