@@ -5,8 +5,10 @@
 //! are one of the [`SHAPES`], one kernel instantiated for those models does it all per
 //! register: the directions are normalized and taken into the frame in registers,
 //! every lobe is evaluated on them (LLVM merges what the lobes compute alike, such as
-//! the half vector) and the sums are stored once. The arithmetic is the unfused
-//! path's, operation for operation, so the outputs are the same bits.
+//! the half vector) and the sums are stored once. Samples of such a closure, and of a
+//! material batch whose kept slots are such a shape, are one pass per register too
+//! ([`sample_register`]). The arithmetic is the unfused path's, operation for
+//! operation, so the outputs are the same bits.
 
 use super::mixture::{self, clamp_random};
 use super::{
