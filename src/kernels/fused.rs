@@ -310,10 +310,14 @@ fn sample_register<S: Shape, L: Lane>(
         ..s
     };
     let evals = S::evals(p, wo, wi, mode);
+    let mut mine = [L::Mask::splat(false); MAX_FUSED];
+    for (m, &label) in mine.iter_mut().zip(labels).take(S::LOBES) {
+        *m = chosen.eq(L::splat(label));
+    }
     let mut own = evals[0];
     let (mut weight, mut probability) = (terms[0].weight, terms[0].probability);
     for k in 1..S::LOBES {
-        let mine = chosen.eq(L::splat(labels[k]));
+        let mine = mine[k];
         own = Eval {
             value: Rgb::select(mine, evals[k].value, own.value),
             pdf: L::select(mine, evals[k].pdf, own.pdf),
@@ -331,7 +335,7 @@ fn sample_register<S: Shape, L: Lane>(
     let own_pdf = probability * sample.pdf;
     let (mut value, mut pdf) = (Rgb::zero(), L::zero());
     for k in 0..S::LOBES {
-        let mine = chosen.eq(L::splat(labels[k]));
+        let mine = mine[k];
         let (v, q) = (
             terms[k].weight * evals[k].value,
             terms[k].probability * evals[k].pdf,
@@ -407,7 +411,7 @@ fn sample_body<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
     true
 }
 
-/// One slot of a fused eval over a material batch's rows: its decoded blocks, weights
+/// One slot of a fused sample over a material batch's rows: its decoded blocks, weights
 /// and selection probabilities per lane (value `p` of lane `j` at `p * len + j`).
 #[derive(Clone, Copy)]
 pub struct FusedRows<'a> {
@@ -532,7 +536,7 @@ pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
 /// A fused mixture sample kernel.
 pub type FusedSample = fn(Kernels, &mut FusedSampleJob<'_>) -> bool;
 /// A fused sample kernel over a material batch's rows.
-pub type FusedRowsEval = fn(Kernels, &mut FusedRowsJob<'_>);
+pub type FusedRowsSample = fn(Kernels, &mut FusedRowsJob<'_>);
 /// [`Shape::matches`] of a shape.
 type Matches = fn(&[Option<TypeId>]) -> bool;
 
@@ -547,7 +551,7 @@ type NoClearcoat = (Diffuse, Sheen, Specular);
 type NoSheen = (Diffuse, Specular, Clearcoat);
 type Plastic = (Diffuse, Specular);
 type Metal = (Specular, Clearcoat);
-const SHAPES: [(Matches, FusedEval, FusedSample, FusedRowsEval); 5] = [
+const SHAPES: [(Matches, FusedEval, FusedSample, FusedRowsSample); 5] = [
     (
         Every::matches,
         eval::<Every>,
@@ -582,7 +586,7 @@ const SHAPES: [(Matches, FusedEval, FusedSample, FusedRowsEval); 5] = [
 
 /// The fused sample over rows of the slots whose built-in models are `models`, in order,
 /// when they are a shape.
-pub fn for_rows(models: &[Option<TypeId>]) -> Option<FusedRowsEval> {
+pub fn for_rows(models: &[Option<TypeId>]) -> Option<FusedRowsSample> {
     if models.len() < 2 || models.len() > MAX_FUSED {
         return None;
     }
