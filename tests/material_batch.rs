@@ -172,7 +172,10 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     rough[20] = f32::NAN;
     color[1][40] = -1.0;
     let bad = [7, 9, 20, 40];
-    let run = |normal: &[Vec<f32>; 3], tangent: &[Vec<f32>; 3], rough: &[f32]| {
+    let run = |normal: &[Vec<f32>; 3],
+               tangent: Option<&[Vec<f32>; 3]>,
+               rough: &[f32],
+               color: &[Vec<f32>; 3]| {
         let overrides = [
             material::OverrideLanes {
                 param: index("roughness"),
@@ -191,7 +194,7 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
             active: None,
             wo: soa(&wo),
             normal: soa(normal),
-            tangent: Some(soa(tangent)),
+            tangent: tangent.map(soa),
             overrides: &overrides,
         };
         let exec = Exec {
@@ -212,57 +215,79 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
         );
         (result.err().map(|e| e.message), value, pdf)
     };
-    let (error, value, pdf) = run(&normal, &tangent, &rough);
-    let error = error.expect("the batch reports its failing lanes");
-    assert!(error.starts_with("lane 7: normal"), "{error}");
-    for i in 0..n {
-        let v = [value[0][i], value[1][i], value[2][i], pdf[i]];
-        if bad.contains(&i) {
-            assert_eq!(v, [0.0; 4], "failed lane {i}");
-            continue;
-        }
-        let nrm = Vec3::new(normal[0][i], normal[1][i], normal[2][i]);
-        let t = Vec3::new(tangent[0][i], tangent[1][i], tangent[2][i]);
-        let t = (t.length_squared() > 0.0).then(|| t.normalize());
-        let ctx = glint::materials::ShadingContext::new(
-            Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
-            Frame::new(nrm, t),
-        );
-        let overrides = [
-            Override {
-                param: index("roughness"),
-                kind: ParamKind::Float,
-                value: [rough[i], 0.0, 0.0],
-            },
-            Override {
-                param: index("base_color"),
-                kind: ParamKind::Rgb,
-                value: [color[0][i], color[1][i], color[2][i]],
-            },
-        ];
-        let closure = material.closure(&ctx, &overrides).unwrap();
-        let e = closure
-            .eval_forward(ctx.wo, Vec3::new(wi[0][i], wi[1][i], wi[2][i]))
-            .unwrap();
-        let want = [e.value.r, e.value.g, e.value.b, e.pdf];
-        for (a, b) in v.iter().zip(want) {
-            assert!(
-                (a - b).abs() <= 2e-5 * b.abs().max(1e-3),
-                "lane {i}: batch {v:?}, closure {want:?}"
+    // Without tangents the chunks are taken from the caller's arrays in one pass
+    // (`batch::material::eval_raw`) until a lane fails; lane 9 does not fail then.
+    for with_tangents in [true, false] {
+        let tangents = with_tangents.then_some(&tangent);
+        let (error, value, pdf) = run(&normal, tangents, &rough, &color);
+        let error = error.expect("the batch reports its failing lanes");
+        assert!(error.starts_with("lane 7: normal"), "{error}");
+        for i in 0..n {
+            let v = [value[0][i], value[1][i], value[2][i], pdf[i]];
+            if bad.contains(&i) && (with_tangents || i != 9) {
+                assert_eq!(v, [0.0; 4], "failed lane {i}");
+                continue;
+            }
+            let nrm = Vec3::new(normal[0][i], normal[1][i], normal[2][i]);
+            let t = tangents.map(|t| Vec3::new(t[0][i], t[1][i], t[2][i]));
+            let t = t
+                .filter(|t| t.length_squared() > 0.0)
+                .map(|t| t.normalize());
+            let ctx = glint::materials::ShadingContext::new(
+                Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
+                Frame::new(nrm, t),
             );
+            let overrides = [
+                Override {
+                    param: index("roughness"),
+                    kind: ParamKind::Float,
+                    value: [rough[i], 0.0, 0.0],
+                },
+                Override {
+                    param: index("base_color"),
+                    kind: ParamKind::Rgb,
+                    value: [color[0][i], color[1][i], color[2][i]],
+                },
+            ];
+            let closure = material.closure(&ctx, &overrides).unwrap();
+            let e = closure
+                .eval_forward(ctx.wo, Vec3::new(wi[0][i], wi[1][i], wi[2][i]))
+                .unwrap();
+            let want = [e.value.r, e.value.g, e.value.b, e.pdf];
+            for (a, b) in v.iter().zip(want) {
+                assert!(
+                    (a - b).abs() <= 2e-5 * b.abs().max(1e-3),
+                    "lane {i}: batch {v:?}, closure {want:?}"
+                );
+            }
         }
     }
     // With lane 7 repaired, lane 9's tangent is the first error, then lane 20's override.
     (normal[0][7], rough[7]) = (0.0, 0.5);
-    let (error, ..) = run(&normal, &tangent, &rough);
+    let (error, ..) = run(&normal, Some(&tangent), &rough, &color);
     assert!(
         error.as_deref().unwrap().starts_with("lane 9: tangent"),
         "{error:?}"
     );
     tangent[0][9] = 1.0;
-    let (error, ..) = run(&normal, &tangent, &rough);
-    let error = error.unwrap();
-    assert!(error.starts_with("lane 20: overrides[0]"), "{error}");
+    for tangents in [Some(&tangent), None] {
+        let (error, ..) = run(&normal, tangents, &rough, &color);
+        let error = error.unwrap();
+        assert!(error.starts_with("lane 20: overrides[0]"), "{error}");
+    }
+    // Each bound of an override's range, on both paths.
+    rough[20] = 0.5;
+    for tangents in [Some(&tangent), None] {
+        let (error, ..) = run(&normal, tangents, &rough, &color);
+        let error = error.unwrap();
+        assert!(error.starts_with("lane 40: overrides[1]"), "{error}");
+    }
+    (rough[7], color[1][40]) = (1.5, 0.5);
+    for tangents in [Some(&tangent), None] {
+        let (error, ..) = run(&normal, tangents, &rough, &color);
+        let error = error.unwrap();
+        assert!(error.starts_with("lane 7: overrides[0]"), "{error}");
+    }
 }
 
 /// Per-lane parameters of a batch: name and one row per component.
@@ -318,9 +343,9 @@ fn matches_closures(
             value: [0, 1, 2].map(|c| rows.get(c).map_or(&[][..], |r| &r[..])),
         })
         .collect();
-    let closure = |i: usize| {
+    let closure = |i: usize, with_tangent: bool| {
         let t = Vec3::new(tangent[0][i], tangent[1][i], tangent[2][i]);
-        let t = (t.length_squared() > 0.0).then(|| t.normalize());
+        let t = (with_tangent && t.length_squared() > 0.0).then(|| t.normalize());
         let nrm = Vec3::new(normal[0][i], normal[1][i], normal[2][i]);
         let ctx = ShadingContext::new(
             Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
@@ -343,14 +368,17 @@ fn matches_closures(
             kernels,
             threads: Threads::Caller,
         };
-        for mask in [None, Some(&active[..])] {
+        // Without a mask or tangents, evals take the chunks from the caller's arrays
+        // (`batch::material::eval_raw`).
+        let runs = [(None, true), (Some(&active[..]), true), (None, false)];
+        for (mask, with_tangent) in runs {
             let input = MaterialInput {
                 count: n,
                 material: &material,
                 active: mask,
                 wo: soa(&wo),
                 normal: soa(&normal),
-                tangent: Some(soa(&tangent)),
+                tangent: with_tangent.then(|| soa(&tangent)),
                 overrides: &overrides,
             };
             let is_active = |i: usize| mask.is_none_or(|m| m[i] != 0);
@@ -392,10 +420,13 @@ fn matches_closures(
             material::eval(&exec, &input, soa(&wi), out).unwrap();
             let isa = kernels.isa().name();
             for i in (0..n).filter(|&i| is_active(i)) {
-                let (c, wo) = closure(i);
+                let (c, wo) = closure(i, with_tangent);
                 let want = c.sample(wo, [u[0][i], u[1][i], u[2][i]]);
                 let got_ok = pdf[i] > 0.0;
-                let what = format!("{isa}, mask {}, lane {i}", mask.is_some());
+                let what = format!(
+                    "{isa}, mask {}, tangents {with_tangent}, lane {i}",
+                    mask.is_some()
+                );
                 match want {
                     Ok(s) => {
                         assert!(got_ok, "{what}: closure sampled, batch failed");
@@ -441,7 +472,7 @@ fn matches_closures(
     }
     (0..n)
         .map(|i| {
-            let (c, wo) = closure(i);
+            let (c, wo) = closure(i, true);
             (c.lobes().len(), c.albedo(wo).unwrap().luminance() < prune)
         })
         .collect()
@@ -593,46 +624,50 @@ fn fused_evals_are_the_slot_by_slot_sums() {
             });
         }
         let active: Vec<u8> = (0..n).map(|i| u8::from(i % 5 != 2)).collect();
-        let input = MaterialInput {
-            count: n,
-            material: &material,
-            active: Some(&active),
-            wo: soa(&wo),
-            normal: soa(&normal),
-            tangent: Some(soa(&tangent)),
-            overrides: &overrides,
-        };
-        for kernels in Kernels::available() {
-            let exec = Exec {
-                kernels,
-                threads: Threads::Caller,
+        // Inactive lanes and tangents stage the chunks; without either they are taken
+        // from the caller's arrays (`batch::material::eval_raw`).
+        for staged in [true, false] {
+            let input = MaterialInput {
+                count: n,
+                material: &material,
+                active: staged.then_some(&active[..]),
+                wo: soa(&wo),
+                normal: soa(&normal),
+                tangent: staged.then(|| soa(&tangent)),
+                overrides: &overrides,
             };
-            let run = |reverse: bool| {
-                let mut value = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
-                let (mut pdf, mut pdf_reverse) = (vec![0.0f32; n], vec![0.0f32; n]);
-                let out = EvalOutput {
-                    value: soa_mut(&mut value),
-                    pdf: &mut pdf,
-                    pdf_reverse: reverse.then_some(&mut pdf_reverse[..]),
+            for kernels in Kernels::available() {
+                let exec = Exec {
+                    kernels,
+                    threads: Threads::Caller,
                 };
-                material::eval(&exec, &input, soa(&wi), out).unwrap();
-                (value, pdf)
-            };
-            let (fused, slot_by_slot) = (run(false), run(true));
-            let mut pdf_only = vec![0.0f32; n];
-            material::pdf(&exec, &input, soa(&wi), &mut pdf_only).unwrap();
-            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
-            let what = format!("{description} on {}", kernels.isa().name());
-            for c in 0..3 {
-                assert_eq!(
-                    bits(&fused.0[c]),
-                    bits(&slot_by_slot.0[c]),
-                    "value {c}: {what}"
-                );
+                let run = |reverse: bool| {
+                    let mut value = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
+                    let (mut pdf, mut pdf_reverse) = (vec![0.0f32; n], vec![0.0f32; n]);
+                    let out = EvalOutput {
+                        value: soa_mut(&mut value),
+                        pdf: &mut pdf,
+                        pdf_reverse: reverse.then_some(&mut pdf_reverse[..]),
+                    };
+                    material::eval(&exec, &input, soa(&wi), out).unwrap();
+                    (value, pdf)
+                };
+                let (fused, slot_by_slot) = (run(false), run(true));
+                let mut pdf_only = vec![0.0f32; n];
+                material::pdf(&exec, &input, soa(&wi), &mut pdf_only).unwrap();
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+                let what = format!("{description} on {}, staged {staged}", kernels.isa().name());
+                for c in 0..3 {
+                    assert_eq!(
+                        bits(&fused.0[c]),
+                        bits(&slot_by_slot.0[c]),
+                        "value {c}: {what}"
+                    );
+                }
+                assert_eq!(bits(&fused.1), bits(&slot_by_slot.1), "pdf: {what}");
+                assert_eq!(bits(&pdf_only), bits(&slot_by_slot.1), "pdf call: {what}");
+                assert!(fused.1.iter().any(|&p| p > 0.0), "{what}");
             }
-            assert_eq!(bits(&fused.1), bits(&slot_by_slot.1), "pdf: {what}");
-            assert_eq!(bits(&pdf_only), bits(&slot_by_slot.1), "pdf call: {what}");
-            assert!(fused.1.iter().any(|&p| p > 0.0), "{what}");
         }
     }
 }

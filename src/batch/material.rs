@@ -25,7 +25,7 @@ use super::{
 };
 use crate::closure::{SampleResult, check_randoms};
 use crate::error::{Error, Status};
-use crate::kernels::expand::{ExpandEval, ExpandJob};
+use crate::kernels::expand::{ExpandEval, ExpandJob, ExpandLanes, RawValue};
 use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, RowsSample};
 use crate::kernels::material_rows::{self, ChooseJob};
 use crate::kernels::{
@@ -223,11 +223,13 @@ fn stage_chunk(
     s.any_failed = any;
     let mut job = ExpandJob {
         len,
-        params: &rows.input[..block_len * len],
+        lanes: ExpandLanes::Staged {
+            params: &rows.input[..block_len * len],
+            per_lane,
+            frame: &rows.frame[..9 * len],
+            wo: view3(&s.wo, len),
+        },
         material: material.params(),
-        per_lane,
-        frame: &rows.frame[..9 * len],
-        wo: view3(&s.wo, len),
         prune: material.prune(),
         known: material.decoded_defaults(),
         decoded: grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len),
@@ -239,6 +241,7 @@ fn stage_chunk(
             value: e.want_value.then(|| rows3(&mut s.value, len)),
             pdf: grow(&mut s.pdf, len),
         }),
+        out_of_range: false,
     };
     material.kind().expand_lanes(kernels, &mut job);
     rows.live = job.kept;
@@ -672,6 +675,9 @@ fn eval_block(
                 want_value: out.value.is_some(),
                 in_pass: out.pdf_reverse.is_none(),
             };
+            if eval.in_pass && eval_raw(kernels, input, wi, lanes, start, out) {
+                return Ok(());
+            }
             stage_chunk(kernels, input, lanes, len, s, &mut failure, Some(eval))?;
             if !eval.in_pass {
                 eval_chunk(kernels, input.material, len, s, eval.want_value);
@@ -689,6 +695,80 @@ fn eval_block(
         })
     })?;
     failure.take().map_or(Ok(()), Err)
+}
+
+/// The in-pass eval of a chunk of consecutive lanes from the caller's arrays straight
+/// into the outputs ([`ExpandLanes::Raw`]): no copies, no rows. False, and the outputs
+/// of the chunk not valid, when it cannot be taken so: lanes with tangents (their
+/// frames are built lane by lane), enum overrides (checked lane by lane), or some
+/// lane's input outside what the raw path takes; the chunk is then staged, which
+/// writes every lane and reports each lane's error.
+fn eval_raw(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    wi: Soa3<'_>,
+    lanes: &[u32],
+    start: usize,
+    out: &mut MaterialEvalOutput<'_>,
+) -> bool {
+    let (first, n) = (lanes[0] as usize, lanes.len());
+    let consecutive = lanes[n - 1] as usize - first + 1 == n;
+    let material = input.material;
+    let specs = material.kind().params();
+    if !consecutive
+        || input.tangent.is_some()
+        || input.overrides.iter().any(|o| o.kind == ParamKind::Enum)
+    {
+        return false;
+    }
+    let lanes = first..first + n;
+    let mut overrides = [None; MAX_MATERIAL_PARAMS];
+    let overrides = &mut overrides[..material.params().len()];
+    for o in input.overrides {
+        let spec = &specs[o.param as usize];
+        let at = params::offset_of(specs, o.param as usize);
+        for (c, value) in overrides[at..at + o.kind.size()].iter_mut().enumerate() {
+            *value = Some(RawValue {
+                row: &o.value[c][lanes.clone()],
+                min: spec.min,
+                max: spec.max,
+            });
+        }
+    }
+    fn rows<'a>(v: Soa3<'a>, lanes: &Range<usize>) -> [&'a [f32]; 3] {
+        [v.x, v.y, v.z].map(|row| &row[lanes.clone()])
+    }
+    let at = first - start..first - start + n;
+    let value = out.value.as_mut().map(|v| {
+        [
+            &mut v.x[at.clone()],
+            &mut v.y[at.clone()],
+            &mut v.z[at.clone()],
+        ]
+    });
+    let mut job = ExpandJob {
+        len: n,
+        lanes: ExpandLanes::Raw {
+            overrides: &*overrides,
+            normal: rows(input.normal, &lanes),
+            wo: rows(input.wo, &lanes),
+        },
+        material: material.params(),
+        prune: material.prune(),
+        known: material.decoded_defaults(),
+        decoded: &mut [],
+        weight: &mut [],
+        probability: &mut [],
+        kept: [false; MAX_SLOTS],
+        eval: Some(ExpandEval {
+            wi: rows(wi, &lanes),
+            value,
+            pdf: &mut out.pdf[at],
+        }),
+        out_of_range: false,
+    };
+    material.kind().expand_lanes(kernels, &mut job);
+    !job.out_of_range
 }
 
 /// Directional albedo of the material at every active lane (what

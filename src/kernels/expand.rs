@@ -9,33 +9,26 @@
 //! Each step is the closure's (`materials::compiled::emit`), operation for operation,
 //! so the rows hold the bits a closure per lane would.
 
-use super::{load_frame, load3, material_rows};
+use super::{load, load_frame, load3, material_rows, store, unit_in_range};
 use crate::error::Error;
 use crate::lobes::{MAX_DECODED_LEN, Model, Params, Transport};
 use crate::materials::compiled::{DecodedBlock, MAX_MATERIAL_PARAMS};
 use crate::materials::{
     Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, SlotModels, SlotVisitor,
 };
+use crate::math::frame::duff_axes;
 use crate::math::lane::MAX_LANES;
-use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::params::block_size;
 use crate::simd::kernel;
 
-/// Inputs and outputs of an expansion over `len` staged lanes (a multiple of
-/// [`super::LANE_MULTIPLE`]).
+/// Inputs and outputs of an expansion over `len` lanes.
 pub struct ExpandJob<'a> {
     pub len: usize,
-    /// The material's values, each lane's where `per_lane` says so: value `p` of lane
-    /// `j` at `p * len + j`.
-    pub params: &'a [f32],
+    /// Where each lane's inputs come from.
+    pub lanes: ExpandLanes<'a>,
     /// The material's own block: the values without rows.
     pub material: &'a [f32],
-    /// The values with rows in `params` (overridden on some lane).
-    pub per_lane: [bool; MAX_MATERIAL_PARAMS],
-    /// Each lane's shading frame: nine rows (t, b, n, each x, y, z).
-    pub frame: &'a [f32],
-    /// Unit `wo` in world space.
-    pub wo: [&'a [f32]; 3],
     /// `Material::prune`: a slot whose share is below it is dropped.
     pub prune: f32,
     /// Decoded blocks known beforehand (`Material::decoded_defaults`): lanes whose slot
@@ -53,13 +46,52 @@ pub struct ExpandJob<'a> {
     pub kept: [bool; MAX_SLOTS],
     /// The material's eval at each lane's `wi`, in the same pass.
     pub eval: Option<ExpandEval<'a>>,
+    /// Out, with [`ExpandLanes::Raw`]: some lane's input is not one the staged path
+    /// takes as it is (a direction outside [`super::Directions::Raw`]'s range, an override
+    /// value out of its range); the outputs are then not valid.
+    pub out_of_range: bool,
+}
+
+/// Where an expansion's per-lane inputs come from.
+pub enum ExpandLanes<'a> {
+    /// Rows the batch layer staged (`len` a multiple of [`super::LANE_MULTIPLE`]).
+    Staged {
+        /// The material's values, each lane's where `per_lane` says so: value `p` of
+        /// lane `j` at `p * len + j`.
+        params: &'a [f32],
+        /// The values with rows in `params` (overridden on some lane).
+        per_lane: [bool; MAX_MATERIAL_PARAMS],
+        /// Each lane's shading frame: nine rows (t, b, n, each x, y, z).
+        frame: &'a [f32],
+        /// Unit `wo` in world space.
+        wo: [&'a [f32]; 3],
+    },
+    /// The caller's arrays from a chunk's first lane (`len` lanes, the last register
+    /// a tail), taken as the staged path takes them: `wo`, the normal and an eval's
+    /// `wi` normalized in the kernel ([`super::Directions::Raw`]), each lane's frame from its
+    /// normal (`Frame::new` without a tangent), override values checked against their
+    /// range.
+    Raw {
+        /// Value `p`'s row and range where an override sets it (one entry per value).
+        overrides: &'a [Option<RawValue<'a>>],
+        normal: [&'a [f32]; 3],
+        wo: [&'a [f32]; 3],
+    },
+}
+
+/// An overridden value's row in the caller's array, and its range.
+#[derive(Clone, Copy)]
+pub struct RawValue<'a> {
+    pub row: &'a [f32],
+    pub min: f32,
+    pub max: f32,
 }
 
 /// An eval in the expansion's pass: what `kernels::fused::rows` computes from the rows
 /// (`sum_k weight_k f_k` and `sum_k p_k pdf_k` over the kept slots, in slot order, each
 /// term as the eval kernels compute it), from the registers instead.
 pub struct ExpandEval<'a> {
-    /// Unit `wi` in world space.
+    /// `wi` in world space: unit, or the caller's with [`ExpandLanes::Raw`].
     pub wi: [&'a [f32]; 3],
     pub value: Option<[&'a mut [f32]; 3]>,
     pub pdf: &'a mut [f32],
@@ -265,7 +297,7 @@ fn stage_slots<M: MaterialModel, L: Lane, const BY_SLOT: bool>(
 fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     let len = job.len;
     let param_count = job.material.len();
-    debug_assert!(len.is_multiple_of(L::LANES) && param_count <= MAX_MATERIAL_PARAMS);
+    debug_assert!(param_count <= MAX_MATERIAL_PARAMS);
     let count = M::Slots::NAMES.len();
     let mut cache = [None; MAX_SLOTS];
     cache[..job.known.len()].copy_from_slice(job.known);
@@ -277,14 +309,47 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     let mut e = Expansion::<L>::default();
     // Out of the loop: each register writes what it reads.
     let mut decoded = [[L::zero(); MAX_DECODED_LEN]; MAX_SLOTS];
+    let mut in_range = L::Mask::splat(true);
     for i in (0..len).step_by(L::LANES) {
-        for (p, r) in raw[..param_count].iter_mut().enumerate() {
-            if job.per_lane[p] {
-                *r = L::load(&job.params[p * len + i..]);
+        let n = L::LANES.min(len - i);
+        let (frame, wo) = match &job.lanes {
+            ExpandLanes::Staged {
+                params,
+                per_lane,
+                frame,
+                wo,
+            } => {
+                debug_assert!(len.is_multiple_of(L::LANES));
+                for (p, r) in raw[..param_count].iter_mut().enumerate() {
+                    if per_lane[p] {
+                        *r = L::load(&params[p * len + i..]);
+                    }
+                }
+                (load_frame::<L>(frame, len, i), load3::<L>(*wo, i, L::LANES))
             }
-        }
-        let frame = load_frame::<L>(job.frame, len, i);
-        let wo = load3::<L>(job.wo, i, L::LANES);
+            ExpandLanes::Raw {
+                overrides,
+                normal,
+                wo,
+            } => {
+                for (p, r) in raw[..param_count].iter_mut().enumerate() {
+                    if let Some(o) = overrides[p] {
+                        let v = load::<L>(o.row, i, n, job.material[p]);
+                        // `ParamSpec::in_range`.
+                        in_range = in_range
+                            & v.abs().le(L::splat(f32::MAX))
+                            & v.ge(L::splat(o.min))
+                            & v.le(L::splat(o.max));
+                        *r = v;
+                    }
+                }
+                let (normal, normal_ok) = unit_in_range(load3::<L>(*normal, i, n));
+                let (t, b) = duff_axes(normal);
+                let (wo, wo_ok) = unit_in_range(load3::<L>(*wo, i, n));
+                in_range = in_range & normal_ok & wo_ok;
+                (LaneFrame { t, b, n: normal }, wo)
+            }
+        };
         // Material batches take no positions, footprints or uvs: zero, as a context
         // that leaves them unset.
         let ctx = Context {
@@ -342,7 +407,15 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             }
             continue;
         };
-        let wi = load3::<L>(eval.wi, i, L::LANES);
+        let wi = load3::<L>(eval.wi, i, n);
+        let wi = match job.lanes {
+            ExpandLanes::Staged { .. } => wi,
+            ExpandLanes::Raw { .. } => {
+                let (wi, ok) = unit_in_range(wi);
+                in_range = in_range & ok;
+                wi
+            }
+        };
         let wi = frame.to_local(wi);
         let mut every_kept = true;
         for p in &probability[..count] {
@@ -357,11 +430,12 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
         let (value, pdf) = sum.unwrap_or((Rgb::zero(), L::zero()));
         if let Some(rows) = eval.value.as_mut() {
             for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
-                v.store(&mut row[i..]);
+                store(v, row, i, n);
             }
         }
-        pdf.store(&mut eval.pdf[i..]);
+        store(pdf, eval.pdf, i, n);
     }
+    job.out_of_range = !in_range.all();
 }
 
 kernel!(
