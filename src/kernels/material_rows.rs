@@ -46,41 +46,59 @@ pub fn select<L: Lane>(
 ) -> [L; MAX_SLOTS] {
     let (zero, one) = (L::zero(), L::one());
     let mut keep = [zero; MAX_SLOTS];
-    // `Material::emit`: an emitted slot is kept unless its share is below `prune`; the
-    // first strongest pruned slot is kept when every slot is pruned.
+    // `Material::emit`: an emitted slot is kept unless its share is below `prune`.
+    let mut emitted = [L::Mask::splat(false); MAX_SLOTS];
     let mut kept = zero;
-    let mut strongest = L::splat(-1.0);
-    let mut strongest_share = L::splat(f32::NEG_INFINITY);
     for k in 0..count {
-        let w = weight[k];
-        let emitted = w.any_positive();
-        let is_kept = emitted & share[k].ge(L::splat(prune));
-        keep[k] = L::select(is_kept, one, zero);
+        emitted[k] = weight[k].any_positive();
+        keep[k] = L::select(emitted[k] & share[k].ge(L::splat(prune)), one, zero);
         kept += keep[k];
-        let stronger = emitted & !is_kept & share[k].gt(strongest_share);
-        strongest_share = L::select(stronger, share[k], strongest_share);
-        strongest = L::select(stronger, L::splat(k as f32), strongest);
     }
+    // The first strongest pruned slot is kept where every slot is pruned (rare: the
+    // search only runs in registers with such a lane).
     let none = kept.eq(zero);
+    if none.any() {
+        let mut strongest = L::splat(-1.0);
+        let mut strongest_share = L::splat(f32::NEG_INFINITY);
+        for k in 0..count {
+            let stronger = emitted[k] & keep[k].eq(zero) & share[k].gt(strongest_share);
+            strongest_share = L::select(stronger, share[k], strongest_share);
+            strongest = L::select(stronger, L::splat(k as f32), strongest);
+        }
+        for (k, p) in keep[..count].iter_mut().enumerate() {
+            let fallback = none & strongest.eq(L::splat(k as f32));
+            *p = L::select(fallback, one, *p);
+        }
+    }
     // `closure::selection` of the kept slots: 1 for a single one, else their shares,
     // or their weights' luminances, or ones, whichever first sums above 0.
-    let (mut n, mut share_sum, mut weight_sum) = (zero, zero, zero);
+    let (mut n, mut share_sum) = (zero, zero);
     for k in 0..count {
-        let fallback = none & strongest.eq(L::splat(k as f32));
-        keep[k] = L::select(fallback, one, keep[k]);
         n += keep[k];
         share_sum += keep[k] * share[k].max(zero);
-        weight_sum += keep[k] * weight[k].luminance().max(zero);
     }
-    let (mut largest, mut total) = (zero, zero);
+    let by_share = share_sum.gt(zero);
+    let mut by = [zero; MAX_SLOTS];
+    if by_share.all() {
+        for k in 0..count {
+            by[k] = share[k].max(zero);
+        }
+    } else {
+        let mut weight_sum = zero;
+        for k in 0..count {
+            weight_sum += keep[k] * weight[k].luminance().max(zero);
+        }
+        for k in 0..count {
+            by[k] = L::select(
+                by_share,
+                share[k].max(zero),
+                L::select(weight_sum.gt(zero), weight[k].luminance().max(zero), one),
+            );
+        }
+    }
+    let mut total = zero;
     for k in 0..count {
-        let by = L::select(
-            share_sum.gt(zero),
-            share[k].max(zero),
-            L::select(weight_sum.gt(zero), weight[k].luminance().max(zero), one),
-        );
-        keep[k] *= L::select(n.eq(one), one, by);
-        largest = largest.max(keep[k]);
+        keep[k] *= L::select(n.eq(one), one, by[k]);
         total += keep[k];
     }
     // `normalize_shares`: times the reciprocal of the sum in slot order, or where that
@@ -93,6 +111,10 @@ pub fn select<L: Lane>(
             *p *= inv;
         }
     } else {
+        let mut largest = zero;
+        for p in &keep[..count] {
+            largest = largest.max(*p);
+        }
         let largest = L::select(largest.gt(zero), largest, one);
         let mut scaled_total = zero;
         let mut scaled = keep;
@@ -227,3 +249,80 @@ kernel!(
     /// One slot's own samples into the mixture (`add_own_body`).
     add_own<>(slot: f32, chosen: &[f32], own_value: [&[f32]; 3], own_pdf: &[f32], value: &mut [&mut [f32]; 3], pdf: &mut [f32]) => add_own_body
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `select` over one lane is `Material::emit`'s pruning and `closure::select`, bit
+    /// for bit, on shares and weights that take each of its branches: kept and pruned
+    /// slots, every slot pruned (the first strongest kept), kept shares summing to 0
+    /// (by the weights' luminances, or uniform), huge shares (normalized through the
+    /// largest), slots without a weight.
+    #[test]
+    fn select_is_the_closure_rule() {
+        let shares = [0.0, -0.0, 1e-4, 1e-3, 0.3, 1.0, 2.5, 3e38, f32::MAX];
+        let channels = [0.0, 0.5, 1.0, 1e30];
+        let mut state = 0x9e37_79b9_u32;
+        let mut pick = move |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as usize % n
+        };
+        for case in 0..200_000 {
+            let count = 1 + pick(MAX_SLOTS.min(5));
+            let prune = [0.0, 1e-3, 0.2][pick(3)];
+            let mut share = [0.0f32; MAX_SLOTS];
+            let mut weight = [Rgb::zero(); MAX_SLOTS];
+            for k in 0..count {
+                share[k] = shares[pick(shares.len())];
+                let c = [0; 3].map(|_| channels[pick(channels.len())]);
+                weight[k] = Rgb::new(c[0], c[1], c[2]);
+            }
+            // The closure's rule over the emitted slots.
+            let (mut kept, mut kept_shares, mut strongest) = (vec![], vec![], None);
+            for k in 0..count {
+                if !weight[k].any_positive() {
+                    continue;
+                }
+                if share[k] < prune {
+                    if strongest.is_none_or(|(s, _)| share[k] > s) {
+                        strongest = Some((share[k], k));
+                    }
+                    continue;
+                }
+                kept.push(k);
+                kept_shares.push(share[k]);
+            }
+            if let (true, Some((s, k))) = (kept.is_empty(), strongest) {
+                kept.push(k);
+                kept_shares.push(s);
+            }
+            if !kept.is_empty() {
+                crate::closure::select(&mut kept_shares, |j| weight[kept[j]].luminance());
+            }
+            let mut want = [0.0f32; MAX_SLOTS];
+            for (&k, &p) in kept.iter().zip(&kept_shares) {
+                want[k] = p;
+            }
+            let mut got_weight = weight;
+            let got = select::<f32>(count, prune, &share, &mut got_weight);
+            assert_eq!(
+                got.map(f32::to_bits),
+                want.map(f32::to_bits),
+                "case {case}: shares {:?}, weights {:?}, prune {prune}: {got:?} vs {want:?}",
+                &share[..count],
+                &weight[..count]
+            );
+            for k in 0..count {
+                let w = if want[k] > 0.0 {
+                    weight[k]
+                } else {
+                    Rgb::zero()
+                };
+                assert_eq!(got_weight[k], w, "case {case}: weight {k}");
+            }
+        }
+    }
+}
