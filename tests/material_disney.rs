@@ -335,6 +335,118 @@ fn hostile_geometry_is_finite_and_follows_the_2012_brdf() {
     assert!(compared >= 2000, "{compared} pairs compared");
 }
 
+/// Base colors down to the smallest denormal keep their hue (`Ctint = base_color /
+/// Cdlum`, whose reciprocal overflowed for a denormal luminance: values NaN and
+/// infinite): the closure's eval follows the 2012 BRDF on the scalar call and every
+/// kernel set, its albedo and samples are finite, and a material batch with these
+/// colors as per-lane overrides gives each lane its closure's eval.
+#[test]
+fn tiny_base_colors_keep_their_hue() {
+    use glint::batch::material::{self, MaterialInput, OverrideLanes};
+    use glint::batch::{EvalOutput, Exec, Threads};
+    let registry = registry();
+    let tinted = Disney {
+        base_color: [0.0; 3],
+        subsurface: 0.5,
+        metallic: 0.3,
+        specular: 0.5,
+        specular_tint: 1.0,
+        roughness: 0.5,
+        anisotropic: 0.0,
+        sheen: 1.0,
+        sheen_tint: 1.0,
+        clearcoat: 1.0,
+        clearcoat_gloss: 0.5,
+    };
+    let colors: [[f32; 3]; 7] = [
+        [0.0, 0.0, 1e-44],
+        [1e-44, 0.0, 0.0],
+        [0.0, 1.4e-45, 0.0],
+        [1e-40, 1e-41, 0.0],
+        [1e-38, 0.0, 2e-39],
+        [3e-38, 1e-38, 1e-37],
+        [0.8, 0.2, 0.1],
+    ];
+    let (o, i) = (
+        Vec3::new(0.3f32, 0.2, 0.93).normalize(),
+        Vec3::new(-0.2f32, 0.1, 0.97).normalize(),
+    );
+    let ctx = ShadingContext::new(o, Frame::IDENTITY);
+    let mut want = Vec::new();
+    for c in colors {
+        let d = Disney {
+            base_color: c.map(f64::from),
+            ..tinted
+        };
+        let closure = material(&registry, &d, 0.0).closure(&ctx, &[]).unwrap();
+        let reference = d.rounded().brdf(to64(i), to64(o)).map(|f| f * to64(i)[2]);
+        for (source, lanes) in common::eval_on_every_kernel_set(&closure, &[o], &[i]) {
+            let (value, pdf) = lanes[0];
+            assert!(pdf.is_finite() && pdf > 0.0, "{c:?} {source}: pdf {pdf}");
+            for (&got, want) in value.iter().zip(reference) {
+                let got = f64::from(got);
+                assert!(
+                    (got - want).abs() <= 1e-4 * want.abs() + 1e-7,
+                    "{c:?} {source}: value {value:?}, reference {reference:?}"
+                );
+            }
+        }
+        let albedo = closure.albedo(o).unwrap();
+        let finite = |v: glint::math::Rgb<f32>| [v.r, v.g, v.b].iter().all(|x| x.is_finite());
+        assert!(finite(albedo), "{c:?}: albedo {albedo:?}");
+        for u in [[0.1, 0.3, 0.7], [0.5, 0.6, 0.2], [0.9, 0.8, 0.4]] {
+            let s = closure.sample(o, u).unwrap();
+            assert!(finite(s.weight) && s.pdf.is_finite(), "{c:?}: {s:?}");
+        }
+        want.push(closure.eval_forward(o, i).unwrap());
+    }
+    // The material batch, the colors as per-lane overrides.
+    let m = material(&registry, &tinted, 0.0);
+    let n = colors.len();
+    let base: [Vec<f32>; 3] = [0, 1, 2].map(|k| colors.iter().map(|c| c[k]).collect());
+    let rows = |v: Vec3<f32>| [vec![v.x; n], vec![v.y; n], vec![v.z; n]];
+    let (wo, wi, normal) = (rows(o), rows(i), rows(Vec3::new(0.0, 0.0, 1.0)));
+    let overrides = [OverrideLanes {
+        param: 0,
+        kind: ParamKind::Rgb,
+        value: [&base[0], &base[1], &base[2]],
+    }];
+    let input = MaterialInput {
+        count: n,
+        material: &m,
+        active: None,
+        wo: common::soa(&wo),
+        normal: common::soa(&normal),
+        tangent: None,
+        overrides: &overrides,
+    };
+    for kernels in glint::simd::Kernels::available() {
+        let exec = Exec {
+            kernels,
+            threads: Threads::Caller,
+        };
+        let mut value = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
+        let mut pdf = vec![0.0f32; n];
+        let out = EvalOutput {
+            value: common::soa_mut(&mut value),
+            pdf: &mut pdf,
+            pdf_reverse: None,
+        };
+        material::eval(&exec, &input, common::soa(&wi), out).unwrap();
+        for (lane, e) in want.iter().enumerate() {
+            let got = [value[0][lane], value[1][lane], value[2][lane], pdf[lane]];
+            let want = [e.value.r, e.value.g, e.value.b, e.pdf];
+            for (a, b) in got.iter().zip(want) {
+                assert!(
+                    (a - b).abs() <= 2e-5 * b.abs().max(1e-30),
+                    "{}: lane {lane} {got:?} vs closure {want:?}",
+                    kernels.isa().name()
+                );
+            }
+        }
+    }
+}
+
 /// The closure emits only lobes that can contribute: no clearcoat at clearcoat 0, no
 /// diffuse or sheen at metallic 1, no sheen at sheen 0; everything with every lobe on.
 #[test]

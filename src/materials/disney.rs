@@ -28,10 +28,13 @@ use crate::lobes::disney_diffuse::DisneyDiffuse;
 use crate::lobes::disney_sheen::DisneySheen;
 use crate::lobes::disney_specular::DisneySpecular;
 use crate::lobes::{Params, VerifyCase};
-use crate::math::{Lane, Rgb};
+use crate::math::{Lane, Mask, Rgb};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct Disney;
+
+/// 2^64: takes the smallest denormal's luminance (0.1 of 1.4e-45) to a normal float.
+const TINY_COLOR_SCALE: f32 = 18_446_744_073_709_551_616.0;
 
 /// Slots, in [`Disney::Slots`] order.
 pub const DIFFUSE: usize = 0;
@@ -199,11 +202,24 @@ impl MaterialModel for Disney {
         let dielectric = L::one() - metallic;
         let (zero, one) = (L::zero(), L::one());
 
-        // Burley 2012's luminance approximation and hue.
-        let lum = L::splat(0.3) * base.r + L::splat(0.6) * base.g + L::splat(0.1) * base.b;
+        // Burley 2012's luminance approximation and hue. A color whose luminance is not
+        // a normal float (every channel below about 1e-37) is scaled by 2^64 first
+        // (exactly): its luminance's reciprocal would overflow, and a denormal
+        // luminance would round its hue away.
+        let luminance = |c: Rgb<L>| L::splat(0.3) * c.r + L::splat(0.6) * c.g + L::splat(0.1) * c.b;
+        let (mut lum, mut hue) = (luminance(base), base);
+        let tiny = lum.lt(L::splat(f32::MIN_POSITIVE));
+        if tiny.any() {
+            let scale = L::select(tiny, L::splat(TINY_COLOR_SCALE), one);
+            hue = base.map(
+                #[inline(always)]
+                |c| c * scale,
+            );
+            lum = luminance(hue);
+        }
         let has_hue = lum.gt(zero);
         let inv_lum = one / L::select(has_hue, lum, one);
-        let tint = base.map(
+        let tint = hue.map(
             #[inline(always)]
             |c| L::select(has_hue, c * inv_lum, one),
         );
