@@ -211,10 +211,14 @@ fn aspect_coordinate<L: Lane>(anisotropic: L) -> L {
 #[inline(always)]
 fn sum_pairs<L: Lane, const C: usize>(pairs: &[u32], c: [(L, L); C]) -> (L, L) {
     let (mut a, mut b) = (L::zero(), L::zero());
-    for (cell, w) in c {
-        let (ca, cb) = L::gather_code_pair(pairs, cell);
-        a = w.mul_add(ca, a);
-        b = w.mul_add(cb, b);
+    // `corners`' first axis is `cos_o`'s, of stride 1: corners 2j and 2j + 1 are
+    // adjacent cells, read together.
+    for corner in c.chunks_exact(2) {
+        let cells = L::gather_code_pairs_adjacent(pairs, corner[0].0);
+        for ((ca, cb), &(_, w)) in cells.into_iter().zip(corner) {
+            a = w.mul_add(ca, a);
+            b = w.mul_add(cb, b);
+        }
     }
     let scale = L::splat(1.0 / f32::from(u16::MAX));
     (a * scale, b * scale)
@@ -524,8 +528,13 @@ impl ClearcoatTable {
         let c: [(L, L); 4] = corners(L::zero(), [(im, fm, 1), (ig, fg, NM)]);
         let values = Self::values();
         let mut sum = L::zero();
-        for (cell, w) in c {
-            sum = w.mul_add(L::gather(values, cell), sum);
+        // `corners`' first axis is `cos_o`'s, of stride 1: corners 2j and 2j + 1 are
+        // adjacent cells, read together.
+        for corner in c.chunks_exact(2) {
+            let cells = L::gather_adjacent(values, corner[0].0);
+            for (v, &(_, w)) in cells.into_iter().zip(corner) {
+                sum = w.mul_add(v, sum);
+            }
         }
         sum
     }

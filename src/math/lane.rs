@@ -105,6 +105,16 @@ pub trait Lane:
     fn frexp(self) -> (Self, Self);
     /// `table[index]` per lane; `index` holds integral values in `0..table.len()`.
     fn gather(table: &[f32], index: Self) -> Self;
+    /// `table[index]` and `table[index + 1]` per lane (`index + 1 < table.len()`): two
+    /// cells adjacent along a table's stride-1 axis, which the SIMD lanes read with one
+    /// 64-bit gather per lane instead of two 32-bit ones.
+    #[inline(always)]
+    fn gather_adjacent(table: &[f32], index: Self) -> [Self; 2] {
+        [
+            Self::gather(table, index),
+            Self::gather(table, index + Self::one()),
+        ]
+    }
     /// The lanes where `mask` is set, in lane order, moved to the front; the other
     /// lanes are unspecified.
     fn compress(self, mask: Self::Mask) -> Self;
@@ -115,6 +125,15 @@ pub trait Lane:
     /// integral `f32`; `index` as for [`Lane::gather`]. One gather reads a pair of
     /// fixed-point table channels (the Disney specular's `A` and `B`).
     fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self);
+    /// [`Lane::gather_code_pair`] at `index` and `index + 1`, as
+    /// [`Lane::gather_adjacent`] reads them.
+    #[inline(always)]
+    fn gather_code_pairs_adjacent(table: &[u32], index: Self) -> [(Self, Self); 2] {
+        [
+            Self::gather_code_pair(table, index),
+            Self::gather_code_pair(table, index + Self::one()),
+        ]
+    }
     /// `table[index + k]` for `k` in `0..K`: each lane's row of `K` consecutive values
     /// (`index + K <= table.len()`). The scalar lane reads the row as one slice.
     #[inline(always)]

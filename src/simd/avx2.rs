@@ -267,6 +267,14 @@ impl Lane for F32x8 {
         F32x8(intrinsic!(_mm256_i32gather_ps::<4>(table.as_ptr(), index)))
     }
     #[inline(always)]
+    fn gather_adjacent(table: &[f32], index: Self) -> [Self; 2] {
+        let [first, second] = adjacent_cells(table.as_ptr().cast(), table.len(), index);
+        [
+            F32x8(intrinsic!(_mm256_castsi256_ps(first))),
+            F32x8(intrinsic!(_mm256_castsi256_ps(second))),
+        ]
+    }
+    #[inline(always)]
     fn compress(self, mask: M32x8) -> Self {
         let index = &COMPRESS[mask.bits() as usize];
         let index = intrinsic!(_mm256_loadu_si256(index.as_ptr().cast()));
@@ -282,12 +290,52 @@ impl Lane for F32x8 {
     #[inline(always)]
     fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {
         let index = index.table_index(table.len());
-        let pair = intrinsic!(_mm256_i32gather_epi32::<4>(table.as_ptr().cast(), index));
-        let low = intrinsic!(_mm256_and_si256(pair, _mm256_set1_epi32(0xffff)));
-        let high = intrinsic!(_mm256_srli_epi32::<16>(pair));
-        (
-            F32x8(intrinsic!(_mm256_cvtepi32_ps(low))),
-            F32x8(intrinsic!(_mm256_cvtepi32_ps(high))),
-        )
+        split_codes(intrinsic!(_mm256_i32gather_epi32::<4>(
+            table.as_ptr().cast(),
+            index
+        )))
     }
+    #[inline(always)]
+    fn gather_code_pairs_adjacent(table: &[u32], index: Self) -> [(Self, Self); 2] {
+        let [first, second] = adjacent_cells(table.as_ptr(), table.len(), index);
+        [split_codes(first), split_codes(second)]
+    }
+}
+
+/// Each lane's 32-bit cells `index` and `index + 1` of a table of `len` cells at
+/// `table`, by one 64-bit gather per lane; the first cell is clamped into
+/// `0..len - 1`, so the read stays inside (`F32x8::table_index`).
+#[inline(always)]
+fn adjacent_cells(table: *const u32, len: usize, index: F32x8) -> [__m256i; 2] {
+    assert!(len >= 2);
+    let index = index.table_index(len - 1);
+    let base = table.cast::<i64>();
+    // Lanes 0-3 and 4-7, each lane's two cells in its 64 bits (the first low).
+    let low = intrinsic!(_mm256_i32gather_epi64::<4>(
+        base,
+        _mm256_castsi256_si128(index)
+    ));
+    let high = intrinsic!(_mm256_i32gather_epi64::<4>(
+        base,
+        _mm256_extracti128_si256::<1>(index)
+    ));
+    // Each half's first cells, then its second ones.
+    let order = intrinsic!(_mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
+    let low = intrinsic!(_mm256_permutevar8x32_epi32(low, order));
+    let high = intrinsic!(_mm256_permutevar8x32_epi32(high, order));
+    [
+        intrinsic!(_mm256_permute2x128_si256::<0x20>(low, high)),
+        intrinsic!(_mm256_permute2x128_si256::<0x31>(low, high)),
+    ]
+}
+
+/// The two 16-bit codes of each lane's `u32` (low, high), as integral `f32`.
+#[inline(always)]
+fn split_codes(pair: __m256i) -> (F32x8, F32x8) {
+    let low = intrinsic!(_mm256_and_si256(pair, _mm256_set1_epi32(0xffff)));
+    let high = intrinsic!(_mm256_srli_epi32::<16>(pair));
+    (
+        F32x8(intrinsic!(_mm256_cvtepi32_ps(low))),
+        F32x8(intrinsic!(_mm256_cvtepi32_ps(high))),
+    )
 }

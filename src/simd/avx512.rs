@@ -234,6 +234,16 @@ impl Lane for F32x16 {
         F32x16(intrinsic!(_mm512_i32gather_ps::<4>(index, table.as_ptr())))
     }
     #[inline(always)]
+    fn gather_adjacent(table: &[f32], index: Self) -> [Self; 2] {
+        // No `map`: its closure would be a function without the kernel's target
+        // features (tests/simd_inlining.rs).
+        let [first, second] = adjacent_cells(table.as_ptr().cast(), table.len(), index);
+        [
+            F32x16(intrinsic!(_mm512_castsi512_ps(first))),
+            F32x16(intrinsic!(_mm512_castsi512_ps(second))),
+        ]
+    }
+    #[inline(always)]
     fn compress(self, mask: M16) -> Self {
         F32x16(intrinsic!(_mm512_maskz_compress_ps(mask.0, self.0)))
     }
@@ -244,12 +254,52 @@ impl Lane for F32x16 {
     #[inline(always)]
     fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {
         let index = index.table_index(table.len());
-        let pair = intrinsic!(_mm512_i32gather_epi32::<4>(index, table.as_ptr().cast()));
-        let low = intrinsic!(_mm512_and_si512(pair, _mm512_set1_epi32(0xffff)));
-        let high = intrinsic!(_mm512_srli_epi32::<16>(pair));
-        (
-            F32x16(intrinsic!(_mm512_cvtepi32_ps(low))),
-            F32x16(intrinsic!(_mm512_cvtepi32_ps(high))),
-        )
+        split_codes(intrinsic!(_mm512_i32gather_epi32::<4>(
+            index,
+            table.as_ptr().cast()
+        )))
     }
+    #[inline(always)]
+    fn gather_code_pairs_adjacent(table: &[u32], index: Self) -> [(Self, Self); 2] {
+        let [first, second] = adjacent_cells(table.as_ptr(), table.len(), index);
+        [split_codes(first), split_codes(second)]
+    }
+}
+
+/// Each lane's 32-bit cells `index` and `index + 1` of a table of `len` cells at
+/// `table`, by one 64-bit gather per lane; the first cell is clamped into
+/// `0..len - 1`, so the read stays inside (`F32x16::table_index`).
+#[inline(always)]
+fn adjacent_cells(table: *const u32, len: usize, index: F32x16) -> [__m512i; 2] {
+    assert!(len >= 2);
+    let index = index.table_index(len - 1);
+    let base = table.cast::<i64>();
+    // Lanes 0-7 and 8-15, each lane's two cells in its 64 bits (the first low).
+    let low = intrinsic!(_mm512_i32gather_epi64::<4>(
+        _mm512_castsi512_si256(index),
+        base
+    ));
+    let high = intrinsic!(_mm512_i32gather_epi64::<4>(
+        _mm512_extracti64x4_epi64::<1>(index),
+        base
+    ));
+    let first = intrinsic!(_mm512_setr_epi32(
+        0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30
+    ));
+    let second = intrinsic!(_mm512_add_epi32(first, _mm512_set1_epi32(1)));
+    [
+        intrinsic!(_mm512_permutex2var_epi32(low, first, high)),
+        intrinsic!(_mm512_permutex2var_epi32(low, second, high)),
+    ]
+}
+
+/// The two 16-bit codes of each lane's `u32` (low, high), as integral `f32`.
+#[inline(always)]
+fn split_codes(pair: __m512i) -> (F32x16, F32x16) {
+    let low = intrinsic!(_mm512_and_si512(pair, _mm512_set1_epi32(0xffff)));
+    let high = intrinsic!(_mm512_srli_epi32::<16>(pair));
+    (
+        F32x16(intrinsic!(_mm512_cvtepi32_ps(low))),
+        F32x16(intrinsic!(_mm512_cvtepi32_ps(high))),
+    )
 }

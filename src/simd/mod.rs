@@ -307,3 +307,74 @@ fn map_math_lanes<L: Lane>(f: MathFn, x: &[f32], y: &[f32], out: &mut [f32]) {
         out[start..end].copy_from_slice(&pad[2][..len]);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `gather_adjacent` and `gather_code_pairs_adjacent` of every lane index of `index`
+    /// into `out`: per register, both cells of each (eight rows: the f32 pair, then the
+    /// two code pairs' four channels), and the same from single gathers.
+    #[inline(always)]
+    fn adjacent_lanes<L: Lane>(
+        values: &[f32],
+        codes: &[u32],
+        index: &[f32],
+        out: &mut [Vec<f32>; 12],
+    ) {
+        for i in (0..index.len()).step_by(L::LANES) {
+            let at = L::load(&index[i..]);
+            let [a, b] = L::gather_adjacent(values, at);
+            let [(c, d), (e, f)] = L::gather_code_pairs_adjacent(codes, at);
+            let (g, h) = L::gather_code_pair(codes, at);
+            let (j, k) = L::gather_code_pair(codes, at + L::one());
+            let rows = [
+                a,
+                b,
+                c,
+                d,
+                e,
+                f,
+                L::gather(values, at),
+                L::gather(values, at + L::one()),
+                g,
+                h,
+                j,
+                k,
+            ];
+            for (row, v) in out.iter_mut().zip(rows) {
+                v.store(&mut row[i..]);
+            }
+        }
+    }
+
+    kernel!(adjacent<>(values: &[f32], codes: &[u32], index: &[f32], out: &mut [Vec<f32>; 12]) => adjacent_lanes);
+
+    /// The 64-bit reads of adjacent cells return, on every ISA, the bits two single
+    /// gathers return: at the table's first and last pairs and random cells.
+    #[test]
+    fn adjacent_gathers_read_two_cells() {
+        let len = 1001;
+        let values: Vec<f32> = (0..len).map(|i| (i as f32 * 0.37).sin() * 1e3).collect();
+        let codes: Vec<u32> = (0..len as u32)
+            .map(|i| i.wrapping_mul(2_654_435_761))
+            .collect();
+        let mut index: Vec<f32> = vec![0.0, (len - 2) as f32, 1.0, (len - 3) as f32];
+        index.extend((0..60).map(|i| ((i * 7919) % (len - 1)) as f32));
+        for kernels in Kernels::available() {
+            let mut out: [Vec<f32>; 12] = std::array::from_fn(|_| vec![0.0; index.len()]);
+            adjacent(kernels, &values, &codes, &index, &mut out);
+            let bits = |r: &Vec<f32>| r.iter().map(|v| v.to_bits()).collect::<Vec<u32>>();
+            for k in 0..6 {
+                assert_eq!(
+                    bits(&out[k]),
+                    bits(&out[k + 6]),
+                    "{:?}, row {k}",
+                    kernels.isa()
+                );
+            }
+            let scalar: Vec<f32> = index.iter().map(|&i| values[i as usize + 1]).collect();
+            assert_eq!(bits(&out[1]), bits(&scalar), "{:?}", kernels.isa());
+        }
+    }
+}
