@@ -484,10 +484,13 @@ fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
         let p = S::prepare::<L>(&params);
         let frame = load_frame::<L>(job.frame, len, i);
         let wo = direction(job.wo, i, L::LANES, Directions::Unit, &mut unused);
-        let u = [0, 1, 2].map(
-            #[inline(always)]
-            |r| clamp_random(L::load(&job.u[r][i..])),
-        );
+        // No `map`: its closure would be a function without the kernel's target
+        // features (tests/simd_inlining.rs).
+        let u = [
+            clamp_random(L::load(&job.u[0][i..])),
+            clamp_random(L::load(&job.u[1][i..])),
+            clamp_random(L::load(&job.u[2][i..])),
+        ];
         let chosen = (L::load(&job.chosen[i..]), &job.labels);
         let at = (frame, frame.to_local(wo));
         let r = sample_register::<S, L>(&p, &terms, chosen, at, u, job.mode);
