@@ -5,7 +5,7 @@ mod common;
 
 use common::{Rng, soa, soa_mut};
 use glint::batch::material::{self, MaterialInput};
-use glint::batch::{EvalOutput, Exec, SampleOutput, SampleRandoms, Threads};
+use glint::batch::{EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3Mut, Threads};
 use glint::math::Vec3;
 use glint::registry::Registry;
 use glint::simd::Kernels;
@@ -213,10 +213,44 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
                 pdf_reverse: None,
             },
         );
-        (result.err().map(|e| e.message), value, pdf)
+        let error = result.err().map(|e| e.message);
+        // Samples and albedos stage the same lanes (from the caller's arrays too
+        // without tangents): the same first error.
+        let half = vec![0.5f32; n];
+        let mut rows: [Vec<f32>; 7] = std::array::from_fn(|_| vec![0.0f32; n]);
+        let [x, y, z, wx, wy, wz, p] = &mut rows;
+        let sampled = material::sample(
+            &exec,
+            &input,
+            SampleRandoms {
+                u_lobe: &half,
+                u0: &half,
+                u1: &half,
+            },
+            SampleOutput {
+                wi: Soa3Mut { x, y, z },
+                pdf: p,
+                weight: Soa3Mut {
+                    x: wx,
+                    y: wy,
+                    z: wz,
+                },
+                value: None,
+                flags: None,
+                lobe: None,
+                component: None,
+                eta: None,
+                roughness: None,
+            },
+        );
+        assert_eq!(sampled.err().map(|e| e.message), error, "sample");
+        let albedo = material::albedo(&exec, &input, Soa3Mut { x, y, z });
+        assert_eq!(albedo.err().map(|e| e.message), error, "albedo");
+        (error, value, pdf)
     };
     // Without tangents the chunks are taken from the caller's arrays in one pass
-    // (`batch::material::eval_raw`) until a lane fails; lane 9 does not fail then.
+    // (`batch::material::eval_raw`, `stage_raw`) until a lane fails; lane 9 does not
+    // fail then.
     for with_tangents in [true, false] {
         let tangents = with_tangents.then_some(&tangent);
         let (error, value, pdf) = run(&normal, tangents, &rough, &color);

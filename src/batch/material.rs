@@ -25,7 +25,7 @@ use super::{
 };
 use crate::closure::{SampleResult, check_randoms};
 use crate::error::{Error, Status};
-use crate::kernels::expand::{ExpandEval, ExpandJob, ExpandLanes, RawValue};
+use crate::kernels::expand::{ExpandEval, ExpandJob, ExpandLanes, RawValue, StagedRows};
 use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, RowsSample};
 use crate::kernels::material_rows::{self, ChooseJob};
 use crate::kernels::{
@@ -241,6 +241,7 @@ fn stage_chunk(
             value: e.want_value.then(|| rows3(&mut s.value, len)),
             pdf: grow(&mut s.pdf, len),
         }),
+        staged: None,
         out_of_range: false,
     };
     material.kind().expand_lanes(kernels, &mut job);
@@ -697,33 +698,24 @@ fn eval_block(
     failure.take().map_or(Ok(()), Err)
 }
 
-/// The in-pass eval of a chunk of consecutive lanes from the caller's arrays straight
-/// into the outputs ([`ExpandLanes::Raw`]): no copies, no rows. False, and the outputs
-/// of the chunk not valid, when it cannot be taken so: lanes with tangents (their
-/// frames are built lane by lane), enum overrides (checked lane by lane), or some
-/// lane's input outside what the raw path takes; the chunk is then staged, which
-/// writes every lane and reports each lane's error.
-fn eval_raw(
-    kernels: Kernels,
-    input: &MaterialInput<'_>,
-    wi: Soa3<'_>,
+/// The caller's lanes of a chunk of consecutive lanes, and each overridden value's
+/// row in `overrides`, when the chunk can be taken from the caller's arrays as they
+/// are ([`ExpandLanes::Raw`]): not with tangents (their frames are built lane by lane)
+/// or enum overrides (checked lane by lane).
+fn raw_lanes<'a>(
+    input: &MaterialInput<'a>,
     lanes: &[u32],
-    start: usize,
-    out: &mut MaterialEvalOutput<'_>,
-) -> bool {
+    overrides: &mut [Option<RawValue<'a>>],
+) -> Option<Range<usize>> {
     let (first, n) = (lanes[0] as usize, lanes.len());
-    let consecutive = lanes[n - 1] as usize - first + 1 == n;
-    let material = input.material;
-    let specs = material.kind().params();
-    if !consecutive
+    if lanes[n - 1] as usize - first + 1 != n
         || input.tangent.is_some()
         || input.overrides.iter().any(|o| o.kind == ParamKind::Enum)
     {
-        return false;
+        return None;
     }
     let lanes = first..first + n;
-    let mut overrides = [None; MAX_MATERIAL_PARAMS];
-    let overrides = &mut overrides[..material.params().len()];
+    let specs = input.material.kind().params();
     for o in input.overrides {
         let spec = &specs[o.param as usize];
         let at = params::offset_of(specs, o.param as usize);
@@ -735,10 +727,49 @@ fn eval_raw(
             });
         }
     }
-    fn rows<'a>(v: Soa3<'a>, lanes: &Range<usize>) -> [&'a [f32]; 3] {
-        [v.x, v.y, v.z].map(|row| &row[lanes.clone()])
+    Some(lanes)
+}
+
+/// The caller's rows `v` at `lanes`.
+fn caller_rows<'a>(v: Soa3<'a>, lanes: &Range<usize>) -> [&'a [f32]; 3] {
+    [v.x, v.y, v.z].map(|row| &row[lanes.clone()])
+}
+
+/// [`ExpandLanes::Raw`] over the caller's `lanes` ([`raw_lanes`]).
+fn raw_expand_lanes<'a>(
+    input: &MaterialInput<'a>,
+    lanes: &Range<usize>,
+    overrides: &'a [Option<RawValue<'a>>],
+) -> ExpandLanes<'a> {
+    ExpandLanes::Raw {
+        count: lanes.len(),
+        overrides,
+        normal: caller_rows(input.normal, lanes),
+        wo: caller_rows(input.wo, lanes),
     }
-    let at = first - start..first - start + n;
+}
+
+/// The in-pass eval of a chunk of consecutive lanes from the caller's arrays straight
+/// into the outputs ([`ExpandLanes::Raw`]): no copies, no rows. False, and the outputs
+/// of the chunk not valid, when it cannot be taken so ([`raw_lanes`]) or some lane's
+/// input is outside what the raw path takes; the chunk is then staged, which writes
+/// every lane and reports each lane's error.
+fn eval_raw(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    wi: Soa3<'_>,
+    lanes: &[u32],
+    start: usize,
+    out: &mut MaterialEvalOutput<'_>,
+) -> bool {
+    let material = input.material;
+    let mut overrides = [None; MAX_MATERIAL_PARAMS];
+    let overrides = &mut overrides[..material.params().len()];
+    let Some(lanes) = raw_lanes(input, lanes, overrides) else {
+        return false;
+    };
+    let n = lanes.len();
+    let at = lanes.start - start..lanes.end - start;
     let value = out.value.as_mut().map(|v| {
         [
             &mut v.x[at.clone()],
@@ -748,11 +779,7 @@ fn eval_raw(
     });
     let mut job = ExpandJob {
         len: n,
-        lanes: ExpandLanes::Raw {
-            overrides: &*overrides,
-            normal: rows(input.normal, &lanes),
-            wo: rows(input.wo, &lanes),
-        },
+        lanes: raw_expand_lanes(input, &lanes, overrides),
         material: material.params(),
         prune: material.prune(),
         known: material.decoded_defaults(),
@@ -761,14 +788,61 @@ fn eval_raw(
         probability: &mut [],
         kept: [false; MAX_SLOTS],
         eval: Some(ExpandEval {
-            wi: rows(wi, &lanes),
+            wi: caller_rows(wi, &lanes),
             value,
             pdf: &mut out.pdf[at],
         }),
+        staged: None,
         out_of_range: false,
     };
     material.kind().expand_lanes(kernels, &mut job);
     !job.out_of_range
+}
+
+/// A chunk of consecutive lanes staged from the caller's arrays in the expansion's
+/// pass ([`ExpandLanes::Raw`] writing [`StagedRows`]): the rows [`stage_chunk`] writes
+/// for a sample or an albedo, without its copies and passes. False when the
+/// chunk cannot be taken so ([`raw_lanes`]) or some lane's input is outside what the
+/// raw path takes (the chunk is then staged, which reports each lane's error).
+fn stage_raw(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    lanes: &[u32],
+    len: usize,
+    s: &mut Scratch,
+) -> Result<bool, Error> {
+    let material = input.material;
+    let mut overrides = [None; MAX_MATERIAL_PARAMS];
+    let overrides = &mut overrides[..material.params().len()];
+    let Some(lanes) = raw_lanes(input, lanes, overrides) else {
+        return Ok(false);
+    };
+    s.reserve_rows(len)?;
+    super::stage::reserve(&mut s.failed, len)?;
+    s.material.reserve(len, material.params().len())?;
+    grow(&mut s.failed, len).fill(0);
+    s.any_failed = false;
+    let rows = &mut s.material;
+    let mut job = ExpandJob {
+        len,
+        lanes: raw_expand_lanes(input, &lanes, overrides),
+        material: material.params(),
+        prune: material.prune(),
+        known: material.decoded_defaults(),
+        decoded: grow(&mut rows.params, MAX_SLOTS * MAX_PARAMS * len),
+        weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
+        probability: grow(&mut rows.probability, MAX_SLOTS * len),
+        kept: [false; MAX_SLOTS],
+        eval: None,
+        staged: Some(StagedRows {
+            frame: grow(&mut rows.frame, 9 * len),
+            wo: rows3(&mut s.wo, len),
+        }),
+        out_of_range: false,
+    };
+    material.kind().expand_lanes(kernels, &mut job);
+    rows.live = job.kept;
+    Ok(!job.out_of_range)
 }
 
 /// Directional albedo of the material at every active lane (what
@@ -782,7 +856,9 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
         with_scratch(|s| {
             for_chunks(input, start..end, s, |lanes, s| {
                 let len = padded(lanes.len());
-                stage_chunk(exec.kernels, input, lanes, len, s, &mut failure, None)?;
+                if !stage_raw(exec.kernels, input, lanes, len, s)? {
+                    stage_chunk(exec.kernels, input, lanes, len, s, &mut failure, None)?;
+                }
                 // The kept slots' `weight * albedo` (a dropped slot's weight is 0 on its
                 // lane); pruning weighed them by estimates.
                 let live = s.material.live;
@@ -985,7 +1061,9 @@ fn stage_sample(
     failure: &mut LaneError,
 ) -> Result<(), Error> {
     let n = lanes.len();
-    stage_chunk(kernels, input, lanes, len, s, failure, None)?;
+    if !stage_raw(kernels, input, lanes, len, s)? {
+        stage_chunk(kernels, input, lanes, len, s, failure, None)?;
+    }
     let slots = input.material.slots();
     // The random numbers, padding lanes repeating the last lane's; then the lobe
     // choice, as `Closure::sample` makes it.

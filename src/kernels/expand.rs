@@ -46,10 +46,19 @@ pub struct ExpandJob<'a> {
     pub kept: [bool; MAX_SLOTS],
     /// The material's eval at each lane's `wi`, in the same pass.
     pub eval: Option<ExpandEval<'a>>,
+    /// With [`ExpandLanes::Raw`] and no `eval`: rows the samplers read, written in the
+    /// same pass as the staged path writes them.
+    pub staged: Option<StagedRows<'a>>,
     /// Out, with [`ExpandLanes::Raw`]: some lane's input is not one the staged path
     /// takes as it is (a direction outside [`super::Directions::Raw`]'s range, an override
     /// value out of its range); the outputs are then not valid.
     pub out_of_range: bool,
+}
+
+/// Each lane's shading frame (nine rows of `len`: t, b, n, each x, y, z) and unit `wo`.
+pub struct StagedRows<'a> {
+    pub frame: &'a mut [f32],
+    pub wo: [&'a mut [f32]; 3],
 }
 
 /// Where an expansion's per-lane inputs come from.
@@ -66,12 +75,13 @@ pub enum ExpandLanes<'a> {
         /// Unit `wo` in world space.
         wo: [&'a [f32]; 3],
     },
-    /// The caller's arrays from a chunk's first lane (`len` lanes, the last register
-    /// a tail), taken as the staged path takes them: `wo`, the normal and an eval's
-    /// `wi` normalized in the kernel ([`super::Directions::Raw`]), each lane's frame from its
-    /// normal (`Frame::new` without a tangent), override values checked against their
-    /// range.
+    /// The caller's arrays from a chunk's first lane (`count` lanes; the registers
+    /// past them see the staged path's padding), taken as the staged path takes them:
+    /// `wo`, the normal and an eval's `wi` normalized in the kernel
+    /// ([`super::Directions::Raw`]), each lane's frame from its normal (`Frame::new`
+    /// without a tangent), override values checked against their range.
     Raw {
+        count: usize,
         /// Value `p`'s row and range where an override sets it (one entry per value).
         overrides: &'a [Option<RawValue<'a>>],
         normal: [&'a [f32]; 3],
@@ -328,10 +338,12 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 (load_frame::<L>(frame, len, i), load3::<L>(*wo, i, L::LANES))
             }
             ExpandLanes::Raw {
+                count,
                 overrides,
                 normal,
                 wo,
             } => {
+                let n = count.saturating_sub(i).min(L::LANES);
                 for (p, r) in raw[..param_count].iter_mut().enumerate() {
                     if let Some(o) = overrides[p] {
                         let v = load::<L>(o.row, i, n, job.material[p]);
@@ -347,6 +359,15 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 let (t, b) = duff_axes(normal);
                 let (wo, wo_ok) = unit_in_range(load3::<L>(*wo, i, n));
                 in_range = in_range & normal_ok & wo_ok;
+                if let Some(rows) = job.staged.as_mut() {
+                    let axes = [t.x, t.y, t.z, b.x, b.y, b.z, normal.x, normal.y, normal.z];
+                    for (row, v) in axes.into_iter().enumerate() {
+                        v.store(&mut rows.frame[row * len + i..]);
+                    }
+                    for (v, row) in [wo.x, wo.y, wo.z].into_iter().zip(rows.wo.iter_mut()) {
+                        v.store(&mut row[i..]);
+                    }
+                }
                 (LaneFrame { t, b, n: normal }, wo)
             }
         };
