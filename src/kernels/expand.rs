@@ -343,10 +343,12 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 normal,
                 wo,
             } => {
-                let n = count.saturating_sub(i).min(L::LANES);
+                // A register past the caller's lanes (a padded chunk's last on AVX2)
+                // reads none of them: all padding.
+                let (at, n) = (i.min(*count), count.saturating_sub(i).min(L::LANES));
                 for (p, r) in raw[..param_count].iter_mut().enumerate() {
                     if let Some(o) = overrides[p] {
-                        let v = load::<L>(o.row, i, n, job.material[p]);
+                        let v = load::<L>(o.row, at, n, job.material[p]);
                         // `ParamSpec::in_range`.
                         in_range = in_range
                             & v.abs().le(L::splat(f32::MAX))
@@ -355,9 +357,9 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                         *r = v;
                     }
                 }
-                let (normal, normal_ok) = unit_in_range(load3::<L>(*normal, i, n));
+                let (normal, normal_ok) = unit_in_range(load3::<L>(*normal, at, n));
                 let (t, b) = duff_axes(normal);
-                let (wo, wo_ok) = unit_in_range(load3::<L>(*wo, i, n));
+                let (wo, wo_ok) = unit_in_range(load3::<L>(*wo, at, n));
                 in_range = in_range & normal_ok & wo_ok;
                 if let Some(rows) = job.staged.as_mut() {
                     let axes = [t.x, t.y, t.z, b.x, b.y, b.z, normal.x, normal.y, normal.z];

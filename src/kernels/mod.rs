@@ -357,14 +357,11 @@ struct LaneLobe<L> {
     probability: L,
 }
 
-/// Register `i` of `row`: `L::LANES` values, or the first `n` and `fill` (all `fill`
-/// when `n` is 0, `i` then possibly past the row's end).
+/// Register `i` of `row`: `L::LANES` values, or the first `n` and `fill`.
 #[inline(always)]
 fn load<L: Lane>(row: &[f32], i: usize, n: usize, fill: f32) -> L {
     if n == L::LANES {
         L::load(&row[i..])
-    } else if n == 0 {
-        L::splat(fill)
     } else {
         L::load_tail(&row[i..], n, fill)
     }
