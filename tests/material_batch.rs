@@ -164,7 +164,15 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     let tangent = tangents(&mut rng, n, 3);
     let mut rough: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
     let mut color = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
-    let (wo, wi, mut normal, mut tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
+    let (mut wo, wi, mut normal, mut tangent) =
+        (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
+    // Valid lanes of the second chunk whose lengths are outside the range the batch
+    // kernels normalize (squared lengths above 1e24, some overflowing f32; below 1e-24
+    // a direction is an error): staged, they match their closures.
+    for c in 0..3 {
+        (wo[c][270], wo[c][275]) = (wo[c][270] * 1e15, wo[c][275] * 1e25);
+        (normal[c][280], normal[c][285]) = (normal[c][280] * 1e13, normal[c][285] * 1e20);
+    }
     normal[0][7] = f32::NAN;
     rough[7] = 2.0;
     tangent[0][9] = 1e-30;
@@ -262,15 +270,14 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
                 assert_eq!(v, [0.0; 4], "failed lane {i}");
                 continue;
             }
-            let nrm = Vec3::new(normal[0][i], normal[1][i], normal[2][i]);
+            // The library's rule for any length (`Vec3::try_unit`).
+            let unit = |v: &[Vec<f32>; 3]| Vec3::try_unit(v[0][i], v[1][i], v[2][i], "v").unwrap();
+            let nrm = unit(&normal);
             let t = tangents.map(|t| Vec3::new(t[0][i], t[1][i], t[2][i]));
             let t = t
                 .filter(|t| t.length_squared() > 0.0)
                 .map(|t| t.normalize());
-            let ctx = glint::materials::ShadingContext::new(
-                Vec3::new(wo[0][i], wo[1][i], wo[2][i]).normalize(),
-                Frame::new(nrm, t),
-            );
+            let ctx = glint::materials::ShadingContext::new(unit(&wo), Frame::new(nrm, t));
             let overrides = [
                 Override {
                     param: index("roughness"),
