@@ -583,7 +583,8 @@ fn lanes_weighting_one_slot_alone_match_their_closures() {
 }
 
 /// Per-lane anisotropy at the specular estimate's aspect nodes: a closure finds the
-/// nearest node by binary search, the batch by counting comparisons; the two agree on
+/// nearest node by binary search, the batch by counting comparisons (or by the binary
+/// search where a register's lanes share the value); the two agree on
 /// each midpoint between nodes and on the floats either side of it (midpoints from
 /// the table's node formula, `anisotropic = (1 - 10^-x) / 0.9` at `x = (k + 1/2) / 12`).
 #[test]
@@ -601,6 +602,12 @@ fn per_lane_anisotropy_at_the_estimate_nodes_matches_the_closures() {
     matches_closures(description, 0.0, n, 0xa150, |_| {
         vec![("anisotropic", vec![anisotropic.clone()])]
     });
+    // The same value on every lane: the batch takes one binary search per register.
+    for &v in &values {
+        matches_closures(description, 0.0, 17, 0xa151, |_| {
+            vec![("anisotropic", vec![vec![v; 17]])]
+        });
+    }
 }
 
 /// Per-lane clearcoat gloss: the clearcoat's decode takes logarithms in f64, so the

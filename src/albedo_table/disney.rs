@@ -416,9 +416,16 @@ impl SpecularAnisotropicTable {
     fn nearest_nodes<L: Lane>(wo: Vec3<L>, anisotropic: L) -> (L, L) {
         let (aspects, tangents) = Self::midpoints();
         let (one, zero) = (L::one(), L::zero());
+        // `anisotropic` is most often the material's own, the same on every lane: one
+        // binary search then (the same count: the comparisons are monotone).
+        let first = anisotropic.lane0();
         let mut aspect = zero;
-        for &a in aspects {
-            aspect += L::select(anisotropic.gt(L::splat(a)), one, zero);
+        if anisotropic.eq(L::splat(first)).all() {
+            aspect = L::splat(aspects.partition_point(|&m| first > m) as f32);
+        } else {
+            for &a in aspects {
+                aspect += L::select(anisotropic.gt(L::splat(a)), one, zero);
+            }
         }
         let (x, y) = (wo.x.abs(), wo.y.abs());
         let mut azimuth = zero;
