@@ -182,7 +182,8 @@ impl SlotRows {
 /// per-lane material blocks; then the expansion in SIMD, each slot's blocks decoded,
 /// pruned by its albedo estimate and given its selection probability. Lanes with
 /// invalid inputs are flagged in `s.failed` and staged with valid stand-ins. With an
-/// `eval`, the unit `wi` is staged into `s.wi` after the overrides.
+/// `eval`, the unit `wi` is staged into `s.wi` after the overrides. Without one, a
+/// chunk the raw path takes is staged in the expansion's pass ([`stage_raw`]).
 fn stage_chunk(
     kernels: Kernels,
     input: &MaterialInput<'_>,
@@ -192,6 +193,9 @@ fn stage_chunk(
     errors: &mut LaneError,
     eval: Option<StageEval<'_>>,
 ) -> Result<(), Error> {
+    if eval.is_none() && stage_raw(kernels, input, lanes, len, s)? {
+        return Ok(());
+    }
     let material = input.material;
     let block_len = material.params().len();
     s.reserve_rows(len)?;
@@ -803,7 +807,7 @@ fn eval_raw(
 /// pass ([`ExpandLanes::Raw`] writing [`StagedRows`]): the rows [`stage_chunk`] writes
 /// for a sample or an albedo, without its copies and passes. False when the
 /// chunk cannot be taken so ([`raw_lanes`]) or some lane's input is outside what the
-/// raw path takes (the chunk is then staged, which reports each lane's error).
+/// raw path takes (`stage_chunk` then stages it, which reports each lane's error).
 fn stage_raw(
     kernels: Kernels,
     input: &MaterialInput<'_>,
@@ -856,9 +860,7 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
         with_scratch(|s| {
             for_chunks(input, start..end, s, |lanes, s| {
                 let len = padded(lanes.len());
-                if !stage_raw(exec.kernels, input, lanes, len, s)? {
-                    stage_chunk(exec.kernels, input, lanes, len, s, &mut failure, None)?;
-                }
+                stage_chunk(exec.kernels, input, lanes, len, s, &mut failure, None)?;
                 // The kept slots' `weight * albedo` (a dropped slot's weight is 0 on its
                 // lane); pruning weighed them by estimates.
                 let live = s.material.live;
@@ -1061,9 +1063,7 @@ fn stage_sample(
     failure: &mut LaneError,
 ) -> Result<(), Error> {
     let n = lanes.len();
-    if !stage_raw(kernels, input, lanes, len, s)? {
-        stage_chunk(kernels, input, lanes, len, s, failure, None)?;
-    }
+    stage_chunk(kernels, input, lanes, len, s, failure, None)?;
     let slots = input.material.slots();
     // The random numbers, padding lanes repeating the last lane's; then the lobe
     // choice, as `Closure::sample` makes it.
