@@ -9,7 +9,7 @@
 //! Each step is the closure's (`materials::compiled::emit`), operation for operation,
 //! so the rows hold the bits a closure per lane would.
 
-use super::{load, load_frame, load3, material_rows, store, unit_in_range};
+use super::{load, load_frame, load3, material_rows, store, store_frame, unit_in_range};
 use crate::error::Error;
 use crate::lobes::{MAX_DECODED_LEN, Model, Params, Transport};
 use crate::materials::compiled::{DecodedBlock, MAX_MATERIAL_PARAMS};
@@ -359,18 +359,16 @@ fn expand_body<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 }
                 let (normal, normal_ok) = unit_in_range(load3::<L>(*normal, at, n));
                 let (t, b) = duff_axes(normal);
+                let frame = LaneFrame { t, b, n: normal };
                 let (wo, wo_ok) = unit_in_range(load3::<L>(*wo, at, n));
                 in_range = in_range & normal_ok & wo_ok;
                 if let Some(rows) = job.staged.as_mut() {
-                    let axes = [t.x, t.y, t.z, b.x, b.y, b.z, normal.x, normal.y, normal.z];
-                    for (row, v) in axes.into_iter().enumerate() {
-                        v.store(&mut rows.frame[row * len + i..]);
-                    }
+                    store_frame(&frame, rows.frame, len, i);
                     for (v, row) in [wo.x, wo.y, wo.z].into_iter().zip(rows.wo.iter_mut()) {
                         v.store(&mut row[i..]);
                     }
                 }
-                (LaneFrame { t, b, n: normal }, wo)
+                (frame, wo)
             }
         };
         // Material batches take no positions, footprints or uvs: zero, as a context

@@ -6,9 +6,10 @@
 //! `mixture::choose`), so the rows hold the bits a closure per lane would.
 
 use super::mixture::clamp_random;
+use super::store_frame;
 use crate::materials::MAX_SLOTS;
 use crate::math::frame::duff_axes;
-use crate::math::{Lane, Mask, Rgb, Vec3};
+use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::simd::kernel;
 
 /// `frame` (nine rows of `len`: t, b, n, each x, y, z) from unit normals (`Frame::new`
@@ -24,10 +25,7 @@ fn frames_body<L: Lane>(normal: [&[f32]; 3], frame: &mut [f32]) {
             L::load(&normal[2][i..]),
         );
         let (t, b) = duff_axes(n);
-        let axes = [t.x, t.y, t.z, b.x, b.y, b.z, n.x, n.y, n.z];
-        for (row, v) in axes.into_iter().enumerate() {
-            v.store(&mut frame[row * len + i..]);
-        }
+        store_frame(&LaneFrame { t, b, n }, frame, len, i);
     }
 }
 

@@ -448,6 +448,18 @@ fn rgb_at<L: Lane>(rows: &[f32], k: usize, stride: usize, i: usize) -> Rgb<L> {
     )
 }
 
+/// [`load_frame`]'s inverse: the register's frames at lane `i` into nine rows of
+/// `stride` values.
+#[inline(always)]
+fn store_frame<L: Lane>(f: &LaneFrame<L>, frame: &mut [f32], stride: usize, i: usize) {
+    let axes = [
+        f.t.x, f.t.y, f.t.z, f.b.x, f.b.y, f.b.z, f.n.x, f.n.y, f.n.z,
+    ];
+    for (row, v) in axes.into_iter().enumerate() {
+        v.store(&mut frame[row * stride + i..]);
+    }
+}
+
 /// The frames of the register at lane `i` from nine rows of `stride` values (t, b, n,
 /// each x, y, z).
 #[inline(always)]
