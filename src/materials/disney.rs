@@ -33,6 +33,13 @@ use crate::params::{ParamSpec, offset_of};
 
 pub struct Disney;
 
+/// Burley 2012's luminance approximation `Cdlum = 0.3 R + 0.6 G + 0.1 B`. (A function,
+/// not a closure: a closure would lose the kernel's target features.)
+#[inline(always)]
+fn burley_luminance<L: Lane>(c: Rgb<L>) -> L {
+    L::splat(0.3) * c.r + L::splat(0.6) * c.g + L::splat(0.1) * c.b
+}
+
 /// 2^64: takes the smallest denormal's luminance (0.1 of 1.4e-45) to a normal float.
 const TINY_COLOR_SCALE: f32 = 18_446_744_073_709_551_616.0;
 
@@ -206,8 +213,7 @@ impl MaterialModel for Disney {
         // a normal float (every channel below about 1e-37) is scaled by 2^64 first
         // (exactly): its luminance's reciprocal would overflow, and a denormal
         // luminance would round its hue away.
-        let luminance = |c: Rgb<L>| L::splat(0.3) * c.r + L::splat(0.6) * c.g + L::splat(0.1) * c.b;
-        let (mut lum, mut hue) = (luminance(base), base);
+        let (mut lum, mut hue) = (burley_luminance(base), base);
         let tiny = lum.lt(L::splat(f32::MIN_POSITIVE));
         if tiny.any() {
             let scale = L::select(tiny, L::splat(TINY_COLOR_SCALE), one);
@@ -215,7 +221,7 @@ impl MaterialModel for Disney {
                 #[inline(always)]
                 |c| c * scale,
             );
-            lum = luminance(hue);
+            lum = burley_luminance(hue);
         }
         let has_hue = lum.gt(zero);
         let inv_lum = one / L::select(has_hue, lum, one);
