@@ -135,30 +135,43 @@ fn reference_albedo_is_converged() {
     }
 }
 
-#[test]
-fn albedo_fit_matches_quadrature() {
-    let l = lobe("disney_sheen");
-    let color = [1.0, 0.5, 0.1];
-    let p = params(color);
+/// The color both albedo tests use.
+const COLOR: [f32; 3] = [1.0, 0.5, 0.1];
+
+/// The worst relative error of `albedo(wo)` (of a lobe of color [`COLOR`]) against
+/// quadrature at 403 cosines from 1e-7 to 1, and its cosine.
+fn worst_against_quadrature(
+    what: &str,
+    albedo: impl Fn(glint::math::Vec3<f32>) -> [f32; 3],
+) -> (f64, f64) {
     let mut cosines = vec![1e-7, 1e-5, 1e-3];
     cosines.extend((1..=400).map(|i| f64::from(i) / 400.0));
     let mut worst = (0.0f64, 0.0);
     for cos_o in cosines {
         let wo = V::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o).to32();
         let s = reference_albedo(f64::from(wo.z), 48);
-        let got = l.albedo(p.as_slice(), wo, Transport::Radiance).to_array();
+        let got = albedo(wo);
         for c in 0..3 {
-            let want = s * f64::from(color[c]);
-            let err = (f64::from(got[c]) / want - 1.0).abs();
+            let err = (f64::from(got[c]) / (s * f64::from(COLOR[c])) - 1.0).abs();
             if err > worst.0 {
                 worst = (err, cos_o);
             }
         }
     }
     println!(
-        "disney_sheen albedo: worst relative error {:.2e} at cos_o {}",
+        "disney_sheen {what}: worst relative error {:.2e} at cos_o {}",
         worst.0, worst.1
     );
+    worst
+}
+
+#[test]
+fn albedo_fit_matches_quadrature() {
+    let l = lobe("disney_sheen");
+    let p = params(COLOR);
+    let worst = worst_against_quadrature("albedo", |wo| {
+        l.albedo(p.as_slice(), wo, Transport::Radiance).to_array()
+    });
     assert!(worst.0 < 3e-5, "{worst:?}");
     // The documented range: 0.0885 at grazing, 2.57e-4 at normal view.
     assert_close(reference_albedo(1e-9, 48), 0.08845, 1e-3, 0.0, "grazing");
@@ -171,30 +184,13 @@ fn albedo_fit_matches_quadrature() {
 #[test]
 fn albedo_estimate_matches_quadrature() {
     let l = lobe("disney_sheen");
-    let color = [1.0, 0.5, 0.1];
-    let p = params(color);
+    let p = params(COLOR);
     let mut decoded = vec![0.0; l.decoded_len()];
     l.decode(p.as_slice(), &mut decoded);
-    let mut cosines = vec![1e-7, 1e-5, 1e-3];
-    cosines.extend((1..=400).map(|i| f64::from(i) / 400.0));
-    let mut worst = (0.0f64, 0.0);
-    for cos_o in cosines {
-        let wo = V::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o).to32();
-        let s = reference_albedo(f64::from(wo.z), 48);
-        let got = l
-            .albedo_estimate_decoded(&decoded, wo, Transport::Radiance)
-            .to_array();
-        for c in 0..3 {
-            let err = (f64::from(got[c]) / (s * f64::from(color[c])) - 1.0).abs();
-            if err > worst.0 {
-                worst = (err, cos_o);
-            }
-        }
-    }
-    println!(
-        "disney_sheen albedo estimate: worst relative error {:.2e} at cos_o {}",
-        worst.0, worst.1
-    );
+    let worst = worst_against_quadrature("albedo estimate", |wo| {
+        l.albedo_estimate_decoded(&decoded, wo, Transport::Radiance)
+            .to_array()
+    });
     assert!(worst.0 < 1.2e-3, "{worst:?}");
     assert!(worst.0 < f64::from(l.albedo_estimate_tolerance(p.as_slice())));
 }
