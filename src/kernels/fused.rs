@@ -241,8 +241,15 @@ fn store_sums<L: Lane>(
     store(q, pdf, i, n);
 }
 
+/// [`eval_lanes`] two registers at a time (`Lane::Interleaved`): the AVX-512 eval is
+/// bound by its arithmetic and gains nothing, AVX2's 11%.
 #[inline(always)]
 fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
+    eval_lanes::<S, L::Interleaved>(job)
+}
+
+#[inline(always)]
+fn eval_lanes<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
     let len = job.pdf.len();
     let (params, terms) = uniform::<L>(&job.lobes);
     let p = S::prepare::<L>(&params);
@@ -370,8 +377,16 @@ pub struct FusedSampleJob<'a> {
     pub out: FinishOutput<'a>,
 }
 
+/// [`sample_lanes`] two registers at a time (`Lane::Interleaved`): a register's
+/// sample waits on its chain of divisions and square roots, the other's fills the
+/// gaps (full Disney closure: AVX-512 85.6 -> 114.5 M lanes/s, AVX2 58.3 -> 69.5).
 #[inline(always)]
 fn sample_body<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
+    sample_lanes::<S, L::Interleaved>(job)
+}
+
+#[inline(always)]
+fn sample_lanes<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
     let len = job.out.pdf.len();
     let (params, terms) = uniform::<L>(&job.lobes);
     let p = S::prepare::<L>(&params);
@@ -459,27 +474,28 @@ pub struct RowsSample<'a> {
 
 #[inline(always)]
 fn rows_body<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
+    rows_lanes::<S, L::Interleaved>(job);
+}
+
+/// [`rows_body`] over lanes of `L` (`len` is a multiple of [`super::LANE_MULTIPLE`],
+/// which `MAX_LANES` makes a multiple of every lane count).
+#[inline(always)]
+fn rows_lanes<S: Shape, L: Lane>(job: &mut FusedRowsJob<'_>) {
     let len = job.len;
-    let mut raw = [[L::zero(); MAX_LOBE_PARAMS]; MAX_FUSED];
     let mut unused = false;
     for i in (0..len).step_by(L::LANES) {
         let mut terms = [Term::zero(); MAX_FUSED];
+        let mut params = [Params::shared(&[]); MAX_FUSED];
         for k in 0..MAX_FUSED {
             let slot = &job.slots[k];
             if slot.weight.is_empty() {
                 continue;
             }
-            for (p, r) in raw[k][..slot.param_count].iter_mut().enumerate() {
-                *r = L::load(&slot.params[p * len + i..]);
-            }
+            params[k] = Params::rows(slot.params, slot.param_count, len, i);
             terms[k] = Term {
                 weight: rgb_at(slot.weight, 0, len, i),
                 probability: L::load(&slot.probability[i..]),
             };
-        }
-        let mut params = [Params::shared(&[]); MAX_FUSED];
-        for k in 0..MAX_FUSED {
-            params[k] = Params::new(&raw[k][..job.slots[k].param_count]);
         }
         let p = S::prepare::<L>(&params);
         let frame = load_frame::<L>(job.frame, len, i);

@@ -58,6 +58,14 @@ pub struct Prepared<L> {
     subsurface: L,
 }
 
+/// `mix(1, F90, FL) mix(1, F90, FV) = (1 + (F90 - 1) FL) (1 + (F90 - 1) FV)`. A
+/// function, not a closure: a closure is a function of its own that LLVM may leave out
+/// of line, without the kernel's target features (tests/simd_inlining.rs).
+#[inline(always)]
+fn fresnel_pair<L: Lane>(f90_minus_1: L, (fl, fv): (L, L)) -> L {
+    f90_minus_1.mul_add(fl, L::one()) * f90_minus_1.mul_add(fv, L::one())
+}
+
 /// `mix(Fd, ss, subsurface) cos_i`, 0 unless both directions are above the surface.
 /// `ss cos_i` is written `1.25 (Fss (cos_i / (cos_i + cos_o) - cos_i / 2) + cos_i / 2)`,
 /// finite for any positive cosines.
@@ -66,12 +74,12 @@ fn shape<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>) -> L {
     let ok = both_above(wo, wi);
     let (cos_o, cos_i) = (wo.z.min(L::one()), wi.z.min(L::one()));
     let cos2_d = ((L::one() + wo.dot(wi)) * L::splat(0.5)).clamp(L::zero(), L::one());
-    let (fl, fv) = (schlick_weight(cos_i), schlick_weight(cos_o));
-    // mix(1, F90, FL) mix(1, F90, FV) = (1 + (F90 - 1) FL) (1 + (F90 - 1) FV).
-    let pair =
-        |f90_minus_1: L| f90_minus_1.mul_add(fl, L::one()) * f90_minus_1.mul_add(fv, L::one());
-    let fd = pair((L::splat(2.0) * p.roughness).mul_add(cos2_d, L::splat(-0.5)));
-    let fss = pair(p.roughness.mul_add(cos2_d, -L::one()));
+    let weights = (schlick_weight(cos_i), schlick_weight(cos_o));
+    let fd = fresnel_pair(
+        (L::splat(2.0) * p.roughness).mul_add(cos2_d, L::splat(-0.5)),
+        weights,
+    );
+    let fss = fresnel_pair(p.roughness.mul_add(cos2_d, -L::one()), weights);
     let half = cos_i * L::splat(0.5);
     let ss = L::splat(1.25) * fss.mul_add(cos_i.safe_div(cos_i + cos_o) - half, half);
     let mixed = (fd * cos_i).mul_add(L::one() - p.subsurface, ss * p.subsurface);

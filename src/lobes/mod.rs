@@ -239,6 +239,14 @@ enum ParamSource<'a, L> {
     Lanes(&'a [L]),
     /// Splatted on read, so a shared closure's block is not copied into registers.
     Shared(&'a [f32]),
+    /// Staged rows, value `p` of the register at lane `at` at `rows[p * stride + at..]`:
+    /// loaded on read, so a kernel keeps in registers only the values its lobes use.
+    Rows {
+        rows: &'a [f32],
+        count: usize,
+        stride: usize,
+        at: usize,
+    },
 }
 
 impl<'a, L: Lane> Params<'a, L> {
@@ -255,12 +263,25 @@ impl<'a, L: Lane> Params<'a, L> {
             source: ParamSource::Shared(raw),
         }
     }
+    /// The `count` values of a register of lanes at `at` in rows of `stride` values.
+    #[inline(always)]
+    pub fn rows(rows: &'a [f32], count: usize, stride: usize, at: usize) -> Self {
+        Params {
+            source: ParamSource::Rows {
+                rows,
+                count,
+                stride,
+                at,
+            },
+        }
+    }
     /// Whether the block holds `len` values.
     #[inline(always)]
     pub fn holds(&self, len: usize) -> bool {
         let held = match self.source {
             ParamSource::Lanes(raw) => raw.len(),
             ParamSource::Shared(raw) => raw.len(),
+            ParamSource::Rows { count, .. } => count,
         };
         held >= len
     }
@@ -269,6 +290,15 @@ impl<'a, L: Lane> Params<'a, L> {
         match self.source {
             ParamSource::Lanes(raw) => raw[offset],
             ParamSource::Shared(raw) => L::splat(raw[offset]),
+            ParamSource::Rows {
+                rows,
+                count,
+                stride,
+                at,
+            } => {
+                assert!(offset < count);
+                L::load(&rows[offset * stride + at..])
+            }
         }
     }
     #[inline(always)]
@@ -285,6 +315,7 @@ impl<'a, L: Lane> Params<'a, L> {
         match self.source {
             ParamSource::Lanes(raw) => raw[offset].lane0() as usize,
             ParamSource::Shared(raw) => raw[offset] as usize,
+            ParamSource::Rows { .. } => self.float(offset).lane0() as usize,
         }
     }
 }

@@ -8,8 +8,8 @@
 
 use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 
-/// Most lanes of any lane type (AVX-512's 16).
-pub const MAX_LANES: usize = 16;
+/// Most lanes of any lane type (two AVX-512 registers, `simd::pair::Pair`).
+pub const MAX_LANES: usize = 32;
 
 /// A per-lane boolean.
 pub trait Mask: Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self> {
@@ -38,6 +38,12 @@ pub trait Lane:
     + MulAssign
 {
     type Mask: Mask;
+    /// The lane type of kernels bound by their dependency chains rather than by their
+    /// arithmetic (a sample draws, settles and evaluates, each step waiting on
+    /// divisions and square roots): two registers interleaved instruction by
+    /// instruction on the SIMD lanes (`simd::pair::Pair`, the same bits), the scalar
+    /// lane itself.
+    type Interleaved: Lane;
     /// Number of `f32` lanes (1 for the scalar lane).
     const LANES: usize;
 
@@ -199,6 +205,7 @@ impl Mask for bool {
 
 impl Lane for f32 {
     type Mask = bool;
+    type Interleaved = f32;
     const LANES: usize = 1;
 
     #[inline(always)]

@@ -137,6 +137,7 @@ impl F32x8 {
 
 impl Lane for F32x8 {
     type Mask = M32x8;
+    type Interleaved = super::pair::Pair<Self>;
     const LANES: usize = 8;
 
     #[inline(always)]

@@ -116,6 +116,7 @@ impl Mask for M16 {
 
 impl Lane for F32x16 {
     type Mask = M16;
+    type Interleaved = super::pair::Pair<Self>;
     const LANES: usize = 16;
 
     #[inline(always)]

@@ -59,6 +59,7 @@ pub(crate) mod avx2;
 #[cfg(target_arch = "x86_64")]
 #[doc(hidden)]
 pub(crate) mod avx512;
+pub(crate) mod pair;
 pub(crate) use kernel;
 
 /// Call `core::arch` intrinsics from a lane method.
