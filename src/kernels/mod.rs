@@ -521,12 +521,8 @@ fn for_each_register<M: Model, L: Lane>(
             probability,
             stride,
         } => {
-            let mut raw = [L::zero(); MAX_LOBE_PARAMS];
             for i in (0..len).step_by(L::LANES) {
-                for (p, r) in raw[..param_count].iter_mut().enumerate() {
-                    *r = L::load(&params[p * stride + i..]);
-                }
-                let prepared = M::prepare(Params::new(&raw[..param_count]));
+                let prepared = M::prepare(Params::rows(params, param_count, stride, i));
                 let lanes = LaneLobe {
                     frame: load_frame(frame, stride, i),
                     weight: Rgb::new(
@@ -657,14 +653,17 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for AlbedoJob<'_> {
     }
 }
 
+/// Two registers at a time, as [`sample_body`].
 #[inline(always)]
 fn eval_body<M: Model, L: Lane>(job: &mut EvalJob<'_>) {
-    for_each_register::<M, L>(job.lobe, job.len, job);
+    for_each_register::<M, L::Interleaved>(job.lobe, job.len, job);
 }
 
+/// Two registers at a time (`Lane::Interleaved`): a sample's chain of divisions and
+/// square roots (draw, settle, evaluate) leaves the ports idle for one register alone.
 #[inline(always)]
 fn sample_body<M: Model, L: Lane>(job: &mut SampleJob<'_>) {
-    for_each_register::<M, L>(job.lobe, job.len, job);
+    for_each_register::<M, L::Interleaved>(job.lobe, job.len, job);
 }
 
 #[inline(always)]
