@@ -3,8 +3,9 @@
 //! included). The `disney` material with every lobe on (the parameters of
 //! scripts/bench_vs_mitsuba.py's `principled` case); the material batch gets per-lane
 //! `wo`, a normal and two overrides per lane (base color and roughness, as a textured
-//! host passes), the prebuilt closure only `wo`. On the calling thread, at 4096 and
-//! 65536 lanes. Run: `cargo bench --bench material`.
+//! host passes), the prebuilt closure only `wo`. Eval, sample and albedo (a scanline
+//! host's ambient term), on the calling thread, at 4096 and 65536 lanes. Run:
+//! `cargo bench --bench material`.
 
 mod common;
 
@@ -85,7 +86,15 @@ fn sample_output(l: &mut Lanes) -> (SampleRandoms<'_>, SampleOutput<'_>) {
 }
 
 /// `eval` or `sample` of the material batch over `l`.
-fn run_material(exec: &Exec<'_>, m: &Material, l: &mut Lanes, sample: bool) {
+/// The batch call a benchmark times.
+#[derive(Clone, Copy)]
+enum Call {
+    Eval,
+    Sample,
+    Albedo,
+}
+
+fn run_material(exec: &Exec<'_>, m: &Material, l: &mut Lanes, call: Call) {
     let (base_color, roughness) = (
         std::mem::take(&mut l.base_color),
         std::mem::take(&mut l.roughness),
@@ -112,22 +121,26 @@ fn run_material(exec: &Exec<'_>, m: &Material, l: &mut Lanes, sample: bool) {
         tangent: None,
         overrides: &overrides,
     };
-    if sample {
-        let (u, out) = sample_output(l);
-        material::sample(exec, &input, u, out).expect("valid batch");
-    } else {
-        let out = EvalOutput {
-            value: soa_mut(&mut l.value),
-            pdf: &mut l.pdf,
-            pdf_reverse: None,
-        };
-        material::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
+    match call {
+        Call::Sample => {
+            let (u, out) = sample_output(l);
+            material::sample(exec, &input, u, out).expect("valid batch");
+        }
+        Call::Eval => {
+            let out = EvalOutput {
+                value: soa_mut(&mut l.value),
+                pdf: &mut l.pdf,
+                pdf_reverse: None,
+            };
+            material::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
+        }
+        Call::Albedo => material::albedo(exec, &input, soa_mut(&mut l.value)).expect("valid batch"),
     }
     (l.wo, l.normal, l.base_color, l.roughness) = (wo, normal, base_color, roughness);
 }
 
 /// `eval` or `sample` of one prebuilt closure shared by every lane of `l`.
-fn run_closure(exec: &Exec<'_>, c: &glint::Closure, l: &mut Lanes, sample: bool) {
+fn run_closure(exec: &Exec<'_>, c: &glint::Closure, l: &mut Lanes, call: Call) {
     let wo = std::mem::take(&mut l.wo);
     let input = BatchInput {
         count: l.pdf.len(),
@@ -135,16 +148,20 @@ fn run_closure(exec: &Exec<'_>, c: &glint::Closure, l: &mut Lanes, sample: bool)
         active: None,
         wo: soa(&wo),
     };
-    if sample {
-        let (u, out) = sample_output(l);
-        batch::sample(exec, &input, u, out).expect("valid batch");
-    } else {
-        let out = EvalOutput {
-            value: soa_mut(&mut l.value),
-            pdf: &mut l.pdf,
-            pdf_reverse: None,
-        };
-        batch::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
+    match call {
+        Call::Sample => {
+            let (u, out) = sample_output(l);
+            batch::sample(exec, &input, u, out).expect("valid batch");
+        }
+        Call::Eval => {
+            let out = EvalOutput {
+                value: soa_mut(&mut l.value),
+                pdf: &mut l.pdf,
+                pdf_reverse: None,
+            };
+            batch::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
+        }
+        Call::Albedo => batch::albedo(exec, &input, soa_mut(&mut l.value)).expect("valid batch"),
     }
     l.wo = wo;
 }
@@ -166,12 +183,16 @@ fn materials(c: &mut Criterion) {
         for l in lanes.iter_mut() {
             let n = l.pdf.len();
             group.throughput(Throughput::Elements(n as u64));
-            for (what, sample) in [("eval", false), ("sample", true)] {
+            for (what, call) in [
+                ("eval", Call::Eval),
+                ("sample", Call::Sample),
+                ("albedo", Call::Albedo),
+            ] {
                 group.bench_function(BenchmarkId::new(format!("material_{what}"), n), |b| {
-                    b.iter(|| run_material(&exec, &m, black_box(l), sample))
+                    b.iter(|| run_material(&exec, &m, black_box(l), call))
                 });
                 group.bench_function(BenchmarkId::new(format!("closure_{what}"), n), |b| {
-                    b.iter(|| run_closure(&exec, &prebuilt, black_box(l), sample))
+                    b.iter(|| run_closure(&exec, &prebuilt, black_box(l), call))
                 });
             }
         }

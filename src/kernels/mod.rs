@@ -666,9 +666,11 @@ fn sample_body<M: Model, L: Lane>(job: &mut SampleJob<'_>) {
     for_each_register::<M, L::Interleaved>(job.lobe, job.len, job);
 }
 
+/// Two registers at a time, as [`sample_body`]: the tables' gathers of one overlap
+/// the other's arithmetic.
 #[inline(always)]
 fn albedo_body<M: Model, L: Lane>(job: &mut AlbedoJob<'_>) {
-    for_each_register::<M, L>(job.lobe, job.len, job);
+    for_each_register::<M, L::Interleaved>(job.lobe, job.len, job);
 }
 
 /// Normalize the staged directions in place; returns whether any lane's squared
