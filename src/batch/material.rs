@@ -874,8 +874,10 @@ pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> R
                     let p = &rows.probability[k * len..][..len];
                     for (c, sum) in s.value.iter_mut().enumerate() {
                         let a = &rows.albedo[(3 * k + c) * len..][..len];
-                        for j in 0..len {
-                            sum[j] += if p[j] > 0.0 { a[j] } else { 0.0 };
+                        // Zipped slices of one length: no bounds checks, so it vectorizes
+                        // (indexed, this loop was 23% of a Disney material's albedo).
+                        for ((sum, &a), &p) in sum[..len].iter_mut().zip(a).zip(p) {
+                            *sum += if p > 0.0 { a } else { 0.0 };
                         }
                     }
                 }
