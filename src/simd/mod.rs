@@ -73,22 +73,22 @@ macro_rules! intrinsic {
 }
 use intrinsic;
 
-/// `+=`, `-=` and `*=` from the binary operators.
+/// `+=`, `-=` and `*=` from the binary operators (of `$t`, generic over `$g: $bound`).
 macro_rules! compound_assign {
-    ($t:ty) => {
-        impl std::ops::AddAssign for $t {
+    ($t:ty $(, $g:ident: $bound:path)*) => {
+        impl<$($g: $bound),*> std::ops::AddAssign for $t {
             #[inline(always)]
             fn add_assign(&mut self, o: Self) {
                 *self = *self + o;
             }
         }
-        impl std::ops::SubAssign for $t {
+        impl<$($g: $bound),*> std::ops::SubAssign for $t {
             #[inline(always)]
             fn sub_assign(&mut self, o: Self) {
                 *self = *self - o;
             }
         }
-        impl std::ops::MulAssign for $t {
+        impl<$($g: $bound),*> std::ops::MulAssign for $t {
             #[inline(always)]
             fn mul_assign(&mut self, o: Self) {
                 *self = *self * o;

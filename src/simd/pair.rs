@@ -5,6 +5,7 @@
 //! the divider and the arithmetic ports busy with the other half meanwhile. Each lane's
 //! arithmetic is the half's own, so the results are the bits of `L`.
 
+use super::compound_assign;
 use crate::math::lane::MAX_LANES;
 use crate::math::{Lane, Mask};
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
@@ -34,24 +35,7 @@ binary_op!(Sub sub);
 binary_op!(Mul mul);
 binary_op!(Div div);
 
-impl<L: Lane> std::ops::AddAssign for Pair<L> {
-    #[inline(always)]
-    fn add_assign(&mut self, o: Self) {
-        *self = *self + o;
-    }
-}
-impl<L: Lane> std::ops::SubAssign for Pair<L> {
-    #[inline(always)]
-    fn sub_assign(&mut self, o: Self) {
-        *self = *self - o;
-    }
-}
-impl<L: Lane> std::ops::MulAssign for Pair<L> {
-    #[inline(always)]
-    fn mul_assign(&mut self, o: Self) {
-        *self = *self * o;
-    }
-}
+compound_assign!(Pair<L>, L: Lane);
 
 impl<L: Lane> Neg for Pair<L> {
     type Output = Self;
@@ -231,36 +215,26 @@ impl<L: Lane> Lane for Pair<L> {
         let [a1, b1] = L::gather_adjacent(table, index.1);
         [Pair(a0, a1), Pair(b0, b1)]
     }
-    /// Through memory: the halves' lanes meet across the register boundary.
+    /// Each half compressed by its own lanes, the second's written after the first's
+    /// (through memory: the lanes cross the registers' boundary).
     #[inline(always)]
     fn compress(self, mask: Self::Mask) -> Self {
-        let mut lanes = [0.0f32; MAX_LANES];
-        self.store(&mut lanes);
-        let bits = mask.bits();
         let mut out = [0.0f32; MAX_LANES];
-        let mut k = 0;
-        for (j, &v) in lanes.iter().enumerate().take(Self::LANES) {
-            if bits >> j & 1 == 1 {
-                out[k] = v;
-                k += 1;
-            }
-        }
+        self.0.compress(mask.0).store(&mut out);
+        let first = mask.0.bits().count_ones() as usize;
+        self.1.compress(mask.1).store(&mut out[first..]);
         Self::load(&out)
     }
+    /// The first half expands the first lanes, the second those after them.
     #[inline(always)]
     fn expand(self, mask: Self::Mask) -> Self {
         let mut lanes = [0.0f32; MAX_LANES];
         self.store(&mut lanes);
-        let bits = mask.bits();
-        let mut out = [0.0f32; MAX_LANES];
-        let mut k = 0;
-        for (j, o) in out.iter_mut().enumerate().take(Self::LANES) {
-            if bits >> j & 1 == 1 {
-                *o = lanes[k];
-                k += 1;
-            }
-        }
-        Self::load(&out)
+        let first = mask.0.bits().count_ones() as usize;
+        Pair(
+            self.0.expand(mask.0),
+            L::load(&lanes[first..]).expand(mask.1),
+        )
     }
     #[inline(always)]
     fn gather_code_pair(table: &[u32], index: Self) -> (Self, Self) {
