@@ -646,7 +646,8 @@ fn fused_evals_are_the_slot_by_slot_sums() {
         r#"{"material": "disney", "metallic": 1, "clearcoat": 1}"#,
     ];
     let registry = Registry::with_builtins();
-    let n = 203;
+    // Three chunks: a block in one expansion against the staged chunks.
+    let n = 715;
     let mut rng = Rng::new(0xf05e);
     for (s, description) in shapes.iter().enumerate() {
         let material = glint::json::material_from_json(&registry, description, 0.001).unwrap();

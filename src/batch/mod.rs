@@ -380,6 +380,12 @@ fn eval_block<'a, C: ClosureSource<'a>>(
     let Some(closure) = in_place(input) else {
         return staged(start..end, out);
     };
+    // A fused shape runs over the whole block in one call (per chunk, finding the
+    // shape and preparing its lobes took 7% of a Disney closure's eval); when some
+    // lane's direction needs staging, the chunks below redo the block.
+    if fused_eval(kernels, closure, input.wo, wi, start..end, start, out) == Some(true) {
+        return Ok(());
+    }
     // In place needs no scratch buffers: a chunk takes them only to be staged. Its
     // directions in a frame all its lobes share go on the stack.
     let mut local = [[0.0f32; CHUNK]; 6];
@@ -473,6 +479,35 @@ fn uniform_lobe(closure: &Closure, k: usize) -> LobeLanes<'_> {
     }
 }
 
+/// Eval lanes `lanes` of a fused shape in one pass, as [`eval_in_place`]; `None` when
+/// the closure is not one (or a reverse pdf is wanted).
+fn fused_eval(
+    kernels: Kernels,
+    closure: &Closure,
+    wo: Soa3<'_>,
+    wi: Soa3<'_>,
+    lanes: Range<usize>,
+    base: usize,
+    out: &mut EvalBlockOutput<'_>,
+) -> Option<bool> {
+    let frame = shared_frame(closure)?;
+    if out.pdf_reverse.is_some() {
+        return None;
+    }
+    let fused = fused::for_closure(closure)?;
+    let local = lanes.start - base..lanes.end - base;
+    let mut job = FusedEvalJob {
+        mode: closure.transport(),
+        frame,
+        wo: rows(wo, &lanes),
+        wi: rows(wi, &lanes),
+        lobes: fused.lobes,
+        value: out.value.as_mut().map(|v| rows_mut(v, &local)),
+        pdf: &mut out.pdf[local],
+    };
+    Some((fused.eval)(kernels, &mut job))
+}
+
 /// Eval lanes `lanes` in place: the kernels read the caller's directions and write
 /// `out` (whose lane 0 is lane `base`). False when some direction needs the staged
 /// path's exact normalization or error (the outputs are then incomplete).
@@ -504,21 +539,10 @@ fn eval_in_place(
     // normalized as `Directions::Raw` would, the same bits; a fused shape evaluates
     // them all in one pass, with the same bits.
     let n = lanes.len();
-    let frame = shared_frame(closure);
-    if let (Some(frame), None) = (frame, out.pdf_reverse.as_ref())
-        && let Some(fused) = fused::for_closure(closure)
-    {
-        let mut job = FusedEvalJob {
-            mode: closure.transport(),
-            frame,
-            wo: rows(wo, &lanes),
-            wi: rows(wi, &lanes),
-            lobes: fused.lobes,
-            value: out.value.as_mut().map(|v| rows_mut(v, &local)),
-            pdf: &mut out.pdf[local],
-        };
-        return (fused.eval)(kernels, &mut job);
+    if let Some(done) = fused_eval(kernels, closure, wo, wi, lanes.clone(), base, out) {
+        return done;
     }
+    let frame = shared_frame(closure);
     let (wo, wi, directions) = if let Some(frame) = frame {
         let [a, b, c, d, e, f] = local_rows;
         let (mut wo_local, mut wi_local) = (
