@@ -22,7 +22,11 @@
 //!   differ as the lobe does between the two directions, by any factor (measured and
 //!   printed, not bounded). Flags agree except where one call's sample is invalid and
 //!   the other's direction is within `HORIZON` of the surface or comes from the far
-//!   tail `u0 > EDGE_ON` (microfacets seen edge-on, at the visible domain's boundary).
+//!   tail `u0 > EDGE_ON` (microfacets seen edge-on, at the visible domain's boundary),
+//!   and on at most `INDEX_MATCHED_FLAGS` of an index-matched dielectric's samples: its
+//!   settled direction's validity hangs on a half vector that is a difference of nearly
+//!   opposite vectors, which rounding decides (1 of its samples when caller directions
+//!   within four ulps of unit length were first taken as they are).
 
 mod common;
 mod reference;
@@ -50,6 +54,8 @@ const SAMPLE_DIR: f64 = 1e-3;
 const HORIZON: f64 = 1e-3;
 /// So may samples with `u0` above this.
 const EDGE_ON: f32 = 0.9999;
+/// And this share of an index-matched dielectric's samples.
+const INDEX_MATCHED_FLAGS: f64 = 2e-5;
 
 struct Case {
     name: &'static str,
@@ -345,6 +351,10 @@ struct Worst {
     failed: usize,
     /// Samples with other flags than the scalar call's.
     other_flags: usize,
+    /// An index-matched dielectric's samples, and those with other flags at neither
+    /// boundary.
+    index_matched: usize,
+    index_matched_flags: usize,
 }
 
 impl Worst {
@@ -369,6 +379,18 @@ impl Worst {
         if self.other_flags > 0 {
             println!("{what}: {} with other flags", self.other_flags);
         }
+        if self.index_matched > 0 {
+            println!(
+                "{what}: {} of {} index-matched samples with other flags off the boundaries",
+                self.index_matched_flags, self.index_matched
+            );
+        }
+        assert!(
+            self.index_matched_flags as f64 <= INDEX_MATCHED_FLAGS * self.index_matched as f64,
+            "{what}: {} of {} index-matched samples with other flags",
+            self.index_matched_flags,
+            self.index_matched
+        );
         for (key, (v, at)) in &self.table {
             println!("{what} {key}: {v:.2e} ({at})");
         }
@@ -468,13 +490,21 @@ fn samples_match_the_scalar_calls_within_their_conditioning() {
         let dir = |o: &Outputs| V::from32(Vec3::new(o.s_wi[0][i], o.s_wi[1][i], o.s_wi[2][i]));
         let (wb, ws) = (dir(b), dir(s));
         let (fb, fs) = (b.s_flags[i], s.s_flags[i]);
+        let index_matched = case.eta.is_some_and(|e| (e - 1.0).abs() < 0.01);
+        worst.index_matched += usize::from(index_matched);
         if fb != fs {
             // One of the two failed, and the other's direction grazes the surface or
-            // its microfacet the view.
+            // its microfacet the view, or the lobe is index-matched (counted).
             let w = if fb != 0 { wb } else { ws };
             let height = to_local(&case.frame, w.normalize()).z.abs();
             let boundary = height <= HORIZON || p.u[i][1] > EDGE_ON;
-            worst.check((fb == 0 || fs == 0) && boundary, || {
+            let one_failed = fb == 0 || fs == 0;
+            if one_failed && !boundary && index_matched {
+                worst.index_matched_flags += 1;
+                worst.other_flags += 1;
+                return 1;
+            }
+            worst.check(one_failed && boundary, || {
                 format!(
                     "{isa}: flags {fb} / {fs}, direction {w:?} at {height:e} from the surface, at {}",
                     at()

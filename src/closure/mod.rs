@@ -608,7 +608,7 @@ impl Closure {
         // The other lobes see `wi` as an eval given it sees it, normalized once more
         // (the chosen lobe's value is settled there): a narrow lobe turns that last
         // bit into a relative 1e-4 at alpha 0.001.
-        let wi_eval = wi.normalize();
+        let wi_eval = wi.unit_from(wi.length_squared());
         let own = (l.weight * s.value, s.pdf);
         let (value, pdf) = match mixture {
             // Summed in lobe order, as `eval` sums them.

@@ -21,7 +21,7 @@ use crate::closure::MAX_LOBES;
 use crate::fresnel;
 use crate::lobes::{Model, Params, Sample, ToWorld, Transport};
 use crate::math::lane::MAX_LANES;
-use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3, inv_length};
+use crate::math::{Frame, Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::simd::kernel;
 use mixture::ClosureSample;
 
@@ -413,7 +413,7 @@ fn load3<L: Lane>(rows: [&[f32]; 3], i: usize, n: usize) -> Vec3<L> {
 fn unit_in_range<L: Lane>(d: Vec3<L>) -> (Vec3<L>, L::Mask) {
     let len2 = d.length_squared();
     let ok = len2.ge(L::splat(1e-24)) & len2.le(L::splat(1e24));
-    (d * inv_length(len2), ok)
+    (d.unit_from(len2), ok)
 }
 
 /// A job's direction register, normalized when the job's directions are raw;
@@ -429,7 +429,7 @@ fn direction<L: Lane>(
     let d = load3(rows, i, n);
     match directions {
         Directions::Unit | Directions::Local => d,
-        Directions::Sampled => d.normalize(),
+        Directions::Sampled => d.unit_from(d.length_squared()),
         Directions::Raw => {
             let (unit, ok) = unit_in_range(d);
             *out_of_range |= !ok.all();
@@ -949,7 +949,7 @@ pub fn eval_each_lane(
         let wo = frame.to_local(lane_vec(job.wo, i));
         let wi = lane_vec(job.wi, i);
         let wi = frame.to_local(if job.directions == Directions::Sampled {
-            wi.normalize()
+            wi.unit_from(wi.length_squared())
         } else {
             wi
         });
@@ -1043,6 +1043,69 @@ mod tests {
         /// `compress_expand_body` on a kernel set.
         compress_expand<>() -> Option<u32> => compress_expand_body
     );
+
+    /// Each lane of the normalize kernel takes `Vec3::try_unit`'s rule, bit for bit, on
+    /// every kernel set: squared lengths within four ulps of 1 as they are (registers
+    /// all such, or mixed with lanes the series or the exact form scales), others
+    /// scaled.
+    #[test]
+    fn kernels_normalize_each_lane_as_the_scalar_rule() {
+        let len = 4 * MAX_LANES;
+        let mut state = 0x9e37_79b9_u32;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            (state >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut rows: [Vec<f32>; 3] = Default::default();
+        for i in 0..len {
+            let d = Vec3::new(rnd(), rnd(), rnd() + 2.0).normalize();
+            // The first two registers unit only; then lengths about an ulp and
+            // 1e-6 off, 1.5 and 3e-5 (series and exact) among unit lanes.
+            let scale = match (i >= 2 * MAX_LANES, i % 5) {
+                (false, _) | (true, 0) => 1.0,
+                (true, 1) => 1.0 + f32::EPSILON,
+                (true, 2) => 1.0 + 1e-6,
+                (true, 3) => 1.5,
+                _ => 3e-5,
+            };
+            for (row, c) in rows.iter_mut().zip([d.x, d.y, d.z]) {
+                row.push(c * scale);
+            }
+        }
+        let want: Vec<Vec3<f32>> = (0..len)
+            .map(|i| Vec3::try_unit(rows[0][i], rows[1][i], rows[2][i], "d").unwrap())
+            .collect();
+        let unit = |i: usize| {
+            let d = Vec3::new(rows[0][i], rows[1][i], rows[2][i]);
+            (d.length_squared() - 1.0).abs() <= 4.0 * f32::EPSILON
+        };
+        assert!((0..2 * MAX_LANES).all(unit));
+        for (i, w) in want.iter().enumerate().filter(|&(i, _)| unit(i)) {
+            let d = [rows[0][i], rows[1][i], rows[2][i]];
+            assert_eq!(
+                [w.x, w.y, w.z].map(f32::to_bits),
+                d.map(f32::to_bits),
+                "lane {i}"
+            );
+        }
+        for kernels in Kernels::available() {
+            let mut out = rows.clone();
+            let [x, y, z] = &mut out;
+            let far = normalize(kernels, &mut [&mut x[..], &mut y[..], &mut z[..]], len);
+            assert!(!far, "{:?}", kernels.isa());
+            for (i, w) in want.iter().enumerate() {
+                let got = [out[0][i], out[1][i], out[2][i]].map(f32::to_bits);
+                assert_eq!(
+                    got,
+                    [w.x, w.y, w.z].map(f32::to_bits),
+                    "{:?} lane {i}",
+                    kernels.isa()
+                );
+            }
+        }
+    }
 
     #[test]
     fn compress_and_expand_invert_each_other_under_every_mask() {

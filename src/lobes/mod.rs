@@ -219,11 +219,12 @@ impl<L: Lane> ToWorld<L> {
 impl<L: Lane> Settle<L> for ToWorld<L> {
     #[inline(always)]
     fn settle(&mut self, wi: Vec3<L>) -> Vec3<L> {
-        self.world = self.frame.to_world(wi).normalize();
+        let world = self.frame.to_world(wi).normalize();
+        self.world = world;
         // The local direction as an eval given `world` computes it: every eval path
-        // normalizes its input, and normalizing a unit vector can still move its last
-        // bit, which a narrow lobe would amplify.
-        self.frame.to_local(self.world.normalize())
+        // normalizes its input (`Vec3::unit_from`), and normalizing a unit vector can
+        // still move its last bit, which a narrow lobe would amplify.
+        self.frame.to_local(world.unit_from(world.length_squared()))
     }
 }
 

@@ -14,6 +14,10 @@ pub struct Vec3<L> {
 /// Squared lengths within this of 1 are normalized by [`inv_length`]'s series.
 const NEAR_UNIT: f32 = 1.0 / 1024.0;
 
+/// Squared lengths within this of 1 (four ulps of 1.0; a direction normalized in f32
+/// lands there) are unit as they are ([`Vec3::unit_from`]).
+const UNIT: f32 = 4.0 * f32::EPSILON;
+
 /// `1 / sqrt(len2)`, the scale that normalizes a vector of squared length `len2` (0 for
 /// 0). Near 1 (`|len2 - 1| <= 2^-10`: every direction a renderer or a sampler hands
 /// over) it is the series `1 - e/2 + 3e^2/8 - 5e^3/16` in `e = len2 - 1`, whose
@@ -67,6 +71,22 @@ impl<L: Lane> Vec3<L> {
     #[inline(always)]
     pub fn normalize(self) -> Self {
         self * inv_length(self.length_squared())
+    }
+    /// A caller's direction `self`, of squared length `len2`, made unit: as it is where
+    /// `len2` is within [`UNIT`] of 1 (scaling would move it by about an ulp, no closer
+    /// to unit), else times [`inv_length`]. The same rule on every lane type, so scalar
+    /// and batch calls agree bit for bit; a register whose lanes are all unit does no
+    /// arithmetic beyond the test. Not for sampled directions: their lengths differ
+    /// between ISAs by an ulp (`rsqrt`), and the rule's threshold would pass one and
+    /// scale the other (an index-matched dielectric, eta 1.0002, turned that into a
+    /// sample valid on AVX2 only; tests/simd_bound.rs).
+    #[inline(always)]
+    pub fn unit_from(self, len2: L) -> Self {
+        let unit = (len2 - L::one()).abs().le(L::splat(UNIT));
+        if unit.all() {
+            return self;
+        }
+        Vec3::select(unit, self, self * inv_length(len2))
     }
     /// Unit vector through the lane's `rsqrt` (a hardware estimate and one Newton
     /// step: relative error 2.1e-7 at most, tests/vmath.rs), for sampled directions
@@ -227,7 +247,7 @@ impl Vec3<f32> {
         let v = Vec3::new(x, y, z);
         let len2 = v.length_squared();
         if (1e-24..=1e24).contains(&len2) {
-            return Ok(v * inv_length(len2));
+            return Ok(v.unit_from(len2));
         }
         Self::try_unit_far(x, y, z, what)
     }
