@@ -76,9 +76,9 @@ impl<L: Lane> Vec3<L> {
     /// `len2` is within [`UNIT`] of 1 (scaling would move it by about an ulp, no closer
     /// to unit), else times [`inv_length`]. The same rule on every lane type, so scalar
     /// and batch calls agree bit for bit; a register whose lanes are all unit does no
-    /// arithmetic beyond the test. Not for sampled directions: their lengths differ
-    /// between ISAs by an ulp (`rsqrt`), and the rule's threshold would pass one and
-    /// scale the other (an index-matched dielectric, eta 1.0002, turned that into a
+    /// arithmetic beyond the test. Not for a sampled direction's own normalization:
+    /// its length differs between ISAs by an ulp (`rsqrt`), and the rule's threshold
+    /// would pass one and scale the other (an index-matched dielectric, eta 1.0002, turned that into a
     /// sample valid on AVX2 only; tests/simd_bound.rs).
     #[inline(always)]
     pub fn unit_from(self, len2: L) -> Self {
