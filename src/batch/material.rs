@@ -25,7 +25,9 @@ use super::{
 };
 use crate::closure::{SampleResult, check_randoms};
 use crate::error::{Error, Status};
-use crate::kernels::expand::{ExpandEval, ExpandJob, ExpandLanes, RawValue, StagedRows};
+use crate::kernels::expand::{
+    ExpandEval, ExpandJob, ExpandLanes, ExpandSample, RawValue, StagedRows,
+};
 use crate::kernels::fused::{self, FusedRows, FusedRowsJob, MAX_FUSED, RowsSample};
 use crate::kernels::material_rows::{self, ChooseJob};
 use crate::kernels::{
@@ -240,6 +242,7 @@ fn stage_chunk(
         weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
         probability: grow(&mut rows.probability, MAX_SLOTS * len),
         kept: [false; MAX_SLOTS],
+        sample: None,
         eval: eval.filter(|e| e.in_pass).map(|e| ExpandEval {
             wi: view3(&s.wi, len),
             value: e.want_value.then(|| rows3(&mut s.value, len)),
@@ -792,7 +795,6 @@ fn eval_raw(
     let Some(lanes) = raw_range(input, lanes, overrides) else {
         return false;
     };
-    let n = lanes.len();
     let at = lanes.start - start..lanes.end - start;
     let value = out.value.as_mut().map(|v| {
         [
@@ -801,9 +803,29 @@ fn eval_raw(
             &mut v.z[at.clone()],
         ]
     });
-    let mut job = ExpandJob {
-        len: n,
-        lanes: raw_expand_lanes(input, &lanes, overrides),
+    let eval = ExpandEval {
+        wi: caller_rows(wi, &lanes),
+        value,
+        pdf: &mut out.pdf[at],
+    };
+    let mut job = raw_pass_job(input, &lanes, overrides, Some(eval), None);
+    material.kind().expand_lanes(kernels, &mut job);
+    !job.out_of_range
+}
+
+/// An expansion of the caller's consecutive `lanes` ([`raw_expand_lanes`]) that
+/// finishes an eval or a sample in its pass, writing no rows.
+fn raw_pass_job<'a>(
+    input: &MaterialInput<'a>,
+    lanes: &Range<usize>,
+    overrides: &'a [Option<RawValue<'a>>],
+    eval: Option<ExpandEval<'a>>,
+    sample: Option<ExpandSample<'a>>,
+) -> ExpandJob<'a> {
+    let material = input.material;
+    ExpandJob {
+        len: lanes.len(),
+        lanes: raw_expand_lanes(input, lanes, overrides),
         material: material.params(),
         prune: material.prune(),
         known: material.decoded_defaults(),
@@ -811,16 +833,11 @@ fn eval_raw(
         weight: &mut [],
         probability: &mut [],
         kept: [false; MAX_SLOTS],
-        eval: Some(ExpandEval {
-            wi: caller_rows(wi, &lanes),
-            value,
-            pdf: &mut out.pdf[at],
-        }),
+        eval,
+        sample,
         staged: None,
         out_of_range: false,
-    };
-    material.kind().expand_lanes(kernels, &mut job);
-    !job.out_of_range
+    }
 }
 
 /// A chunk of consecutive lanes staged from the caller's arrays in the expansion's
@@ -857,6 +874,7 @@ fn stage_raw(
         weight: grow(&mut rows.weight, MAX_SLOTS * 3 * len),
         probability: grow(&mut rows.probability, MAX_SLOTS * len),
         kept: [false; MAX_SLOTS],
+        sample: None,
         eval: None,
         staged: Some(StagedRows {
             frame: grow(&mut rows.frame, 9 * len),
@@ -927,9 +945,21 @@ pub fn sample(
     out.check(n)?;
     run_blocks(exec, n, out, |start, mut out| {
         let end = (start + super::BLOCK).min(n);
+        // Every lane active: the block in one pass (`sample_raw`); when some lane needs
+        // staging, the chunks below redo the block.
+        if input.active.is_none()
+            && sample_raw(exec.kernels, input, &u, start..end, start, &mut out)
+        {
+            return Ok(());
+        }
         let mut failure = LaneError::default();
         with_scratch(|s| {
             for_chunks(input, start..end, s, |lanes, s| {
+                if let Some(range) = consecutive(lanes)
+                    && sample_raw(exec.kernels, input, &u, range, start, &mut out)
+                {
+                    return Ok(());
+                }
                 sample_chunk(
                     exec.kernels,
                     input,
@@ -944,6 +974,40 @@ pub fn sample(
         })?;
         failure.take().map_or(Ok(()), Err)
     })
+}
+
+/// The samples of consecutive lanes from the caller's arrays straight into the
+/// outputs, in the expansion's pass (`kernels::expand::ExpandSample`): no copies, no
+/// rows, no passes over them. False, and the outputs of the lanes not valid, when the
+/// material's slots are not a fused shape, the lanes cannot be taken so
+/// ([`raw_lanes`]) or some lane's input is outside what the raw path takes (a random
+/// number not finite among them); the chunk is then staged, which writes every lane
+/// and reports each lane's error.
+fn sample_raw(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    u: &SampleRandoms<'_>,
+    lanes: Range<usize>,
+    start: usize,
+    out: &mut SampleOutput<'_>,
+) -> bool {
+    let material = input.material;
+    if !material.kind().samples_in_pass() {
+        return false;
+    }
+    let mut overrides = [None; MAX_MATERIAL_PARAMS];
+    let overrides = &mut overrides[..material.params().len()];
+    let Some(lanes) = raw_range(input, lanes, overrides) else {
+        return false;
+    };
+    let local = lanes.start - start..lanes.end - start;
+    let sample = ExpandSample {
+        u: [u.u_lobe, u.u0, u.u1].map(|row| &row[lanes.clone()]),
+        out: out.finish_rows(&local),
+    };
+    let mut job = raw_pass_job(input, &lanes, overrides, None, Some(sample));
+    material.kind().expand_lanes(kernels, &mut job);
+    !job.out_of_range
 }
 
 /// Rows a material sample sorts: the frame, `wo` and `u` (shared by every slot's run),
@@ -1305,78 +1369,202 @@ mod tests {
             .collect()
     }
 
-    /// `sample_fused` fills every row `sample_slot_by_slot` fills with the same bits,
-    /// for each set of slots the disney material emits (one with the clearcoat on some
-    /// lanes only), per-lane roughness, frames and views on both hemispheres, on every
-    /// kernel set.
-    #[test]
-    fn fused_samples_are_the_slot_by_slot_rows() {
-        let shapes = [
-            r#"{"material": "disney", "sheen": 1, "clearcoat": 1, "subsurface": 0.5, "anisotropic": 0.4}"#,
-            r#"{"material": "disney", "sheen": 0.7, "clearcoat": 0}"#,
-            r#"{"material": "disney", "sheen": 0, "clearcoat": 0.8, "clearcoat_gloss": 0.3}"#,
-            r#"{"material": "disney", "sheen": 0, "clearcoat": 0, "roughness": 0}"#,
-            r#"{"material": "disney", "metallic": 1, "clearcoat": 1}"#,
-        ];
-        let registry = Registry::with_builtins();
-        let n = 203;
-        for (shape, description) in shapes.iter().enumerate() {
-            let material = crate::json::material_from_json(&registry, description, 0.001).unwrap();
-            let seed = 0x5eed + shape as u32;
+    /// Each set of slots the disney material emits: every lobe, no clearcoat (with
+    /// [`TestLanes::overrides`] given `coat`, a clearcoat on some lanes only), no
+    /// sheen, diffuse and specular, specular and clearcoat, the specular alone.
+    const SHAPES: [&str; 6] = [
+        r#"{"material": "disney", "sheen": 1, "clearcoat": 1, "subsurface": 0.5, "anisotropic": 0.4}"#,
+        r#"{"material": "disney", "sheen": 0.7, "clearcoat": 0}"#,
+        r#"{"material": "disney", "sheen": 0, "clearcoat": 0.8, "clearcoat_gloss": 0.3}"#,
+        r#"{"material": "disney", "sheen": 0, "clearcoat": 0, "roughness": 0}"#,
+        r#"{"material": "disney", "metallic": 1, "clearcoat": 1}"#,
+        r#"{"material": "disney", "metallic": 1, "anisotropic": 0.5}"#,
+    ];
+
+    /// Per-lane inputs: unit views, normals and tangents on both hemispheres, random
+    /// numbers, a roughness and a clearcoat on every third lane.
+    struct TestLanes {
+        wo: [Vec<f32>; 3],
+        normal: [Vec<f32>; 3],
+        tangent: [Vec<f32>; 3],
+        u: [Vec<f32>; 3],
+        roughness: Vec<f32>,
+        coat: Vec<f32>,
+    }
+
+    impl TestLanes {
+        fn new(seed: u32, n: usize) -> TestLanes {
             let unit = |k: u32| -> [Vec<f32>; 3] {
                 let [x, y, z] = [0, 1, 2].map(|c| randoms(seed * 7 + k * 3 + c, n));
-                let units =
-                    (0..n).map(|j| Vec3::new(x[j] - 0.5, y[j] - 0.5, z[j] - 0.5).normalize());
-                let (mut x, mut y, mut z) = (vec![], vec![], vec![]);
-                for d in units {
-                    x.push(d.x);
-                    y.push(d.y);
-                    z.push(d.z);
+                let mut rows: [Vec<f32>; 3] = Default::default();
+                for j in 0..n {
+                    let d = Vec3::new(x[j] - 0.5, y[j] - 0.5, z[j] - 0.5).normalize();
+                    for (row, c) in rows.iter_mut().zip([d.x, d.y, d.z]) {
+                        row.push(c);
+                    }
                 }
-                [x, y, z]
+                rows
             };
-            let (wo, normal, tangent) = (unit(1), unit(2), unit(3));
-            fn soa(r: &[Vec<f32>; 3]) -> Soa3<'_> {
-                let [x, y, z] = r.each_ref().map(|v| &v[..]);
-                Soa3 { x, y, z }
+            TestLanes {
+                wo: unit(1),
+                normal: unit(2),
+                tangent: unit(3),
+                u: [0, 1, 2].map(|c| randoms(seed + 20 + c, n)),
+                roughness: randoms(seed + 11, n),
+                coat: (0..n).map(|j| (j % 3 / 2) as f32).collect(),
             }
-            let roughness = randoms(seed + 11, n);
-            let coat: Vec<f32> = (0..n).map(|j| (j % 3 / 2) as f32).collect();
+        }
+
+        /// The roughness override, and with `coat` the clearcoat one.
+        fn overrides(&self, coat: bool) -> Vec<OverrideLanes<'_>> {
             let mut overrides = vec![OverrideLanes {
                 param: 5,
                 kind: ParamKind::Float,
-                value: [&roughness, &[], &[]],
+                value: [&self.roughness, &[], &[]],
             }];
-            if shape == 1 {
+            if coat {
                 overrides.push(OverrideLanes {
                     param: 9,
                     kind: ParamKind::Float,
-                    value: [&coat, &[], &[]],
+                    value: [&self.coat, &[], &[]],
                 });
             }
-            let input = MaterialInput {
-                count: n,
-                material: &material,
+            overrides
+        }
+
+        /// A batch over every lane, with the tangents when `with_tangent`.
+        fn input<'a>(
+            &'a self,
+            material: &'a Material,
+            overrides: &'a [OverrideLanes<'a>],
+            with_tangent: bool,
+        ) -> MaterialInput<'a> {
+            MaterialInput {
+                count: self.u[0].len(),
+                material,
                 active: None,
-                wo: soa(&wo),
-                normal: soa(&normal),
-                tangent: Some(soa(&tangent)),
-                overrides: &overrides,
-            };
-            let u = [0, 1, 2].map(|c| randoms(seed + 20 + c, n));
-            let u = SampleRandoms {
-                u_lobe: &u[0],
-                u0: &u[1],
-                u1: &u[2],
-            };
-            let lanes: Vec<u32> = (0..n as u32).collect();
+                wo: soa(&self.wo),
+                normal: soa(&self.normal),
+                tangent: with_tangent.then(|| soa(&self.tangent)),
+                overrides,
+            }
+        }
+
+        fn randoms(&self) -> SampleRandoms<'_> {
+            SampleRandoms {
+                u_lobe: &self.u[0],
+                u0: &self.u[1],
+                u1: &self.u[2],
+            }
+        }
+    }
+
+    fn soa(r: &[Vec<f32>; 3]) -> Soa3<'_> {
+        let [x, y, z] = r.each_ref().map(|v| &v[..]);
+        Soa3 { x, y, z }
+    }
+
+    /// A sample in the expansion's pass (`sample_raw`) writes every output the staged
+    /// path (`sample_chunk`: rows, the fused rows kernel, `finish_mixture`) writes, with
+    /// the same bits, for each of the [`SHAPES`], per-lane roughness, normals and views
+    /// on both hemispheres, on every kernel set; a lane with a random number not finite
+    /// leaves the chunk to the staged path.
+    #[test]
+    fn samples_in_the_expansion_pass_are_the_staged_samples() {
+        let registry = Registry::with_builtins();
+        let n = 203;
+        for (shape, description) in SHAPES.iter().enumerate() {
+            let material = crate::json::material_from_json(&registry, description, 0.001).unwrap();
+            let mut lanes = TestLanes::new(0x5a3d + shape as u32, n);
+            let all: Vec<u32> = (0..n as u32).collect();
+            for kernels in Kernels::available() {
+                let what = format!("{description} on {}", kernels.isa().name());
+                // Every output of one path, as bits, and whether it took the lanes.
+                let run = |lanes: &TestLanes, in_pass: bool| -> (bool, Vec<Vec<u32>>) {
+                    let overrides = lanes.overrides(shape == 1);
+                    let input = lanes.input(&material, &overrides, false);
+                    let mut f = [0; 12].map(|_| vec![0.0f32; n]);
+                    let mut k = [0; 3].map(|_| vec![0u32; n]);
+                    let [wx, wy, wz, pdf, wr, wg, wb, vr, vg, vb, eta, rough] = &mut f;
+                    let [flags, lobe, component] = &mut k;
+                    let mut out = SampleOutput {
+                        wi: Soa3Mut {
+                            x: wx,
+                            y: wy,
+                            z: wz,
+                        },
+                        pdf,
+                        weight: Soa3Mut {
+                            x: wr,
+                            y: wg,
+                            z: wb,
+                        },
+                        value: Some(Soa3Mut {
+                            x: vr,
+                            y: vg,
+                            z: vb,
+                        }),
+                        flags: Some(flags),
+                        lobe: Some(lobe),
+                        component: Some(component),
+                        eta: Some(eta),
+                        roughness: Some(rough),
+                    };
+                    let u = lanes.randoms();
+                    let taken = if in_pass {
+                        sample_raw(kernels, &input, &u, 0..n, 0, &mut out)
+                    } else {
+                        let mut s = Scratch::default();
+                        let mut failure = LaneError::default();
+                        sample_chunk(kernels, &input, &u, &all, 0, &mut s, &mut failure, &mut out)
+                            .unwrap();
+                        failure.take().is_none()
+                    };
+                    let bits = |row: &Vec<f32>| row.iter().map(|v| v.to_bits()).collect();
+                    (taken, f.iter().map(bits).chain(k).collect())
+                };
+                let (taken, in_pass) = run(&lanes, true);
+                assert!(taken, "{what}");
+                let (_, staged) = run(&lanes, false);
+                for (k, (a, b)) in in_pass.iter().zip(&staged).enumerate() {
+                    let lane = a.iter().zip(b).position(|(a, b)| a != b);
+                    assert!(lane.is_none(), "output {k}, lane {lane:?}: {what}");
+                }
+                let valid = in_pass[3]
+                    .iter()
+                    .filter(|&&p| f32::from_bits(p) > 0.0)
+                    .count();
+                assert!(valid > n / 4, "{valid} valid samples: {what}");
+                let keep = lanes.u[1][17];
+                lanes.u[1][17] = f32::NAN;
+                assert!(!run(&lanes, true).0, "{what}");
+                assert!(!run(&lanes, false).0, "{what}");
+                lanes.u[1][17] = keep;
+            }
+        }
+    }
+
+    /// `sample_fused` fills every row `sample_slot_by_slot` fills with the same bits,
+    /// for each of the [`SHAPES`] of two slots or more (one slot is no fused shape),
+    /// per-lane roughness, frames and views on both hemispheres, on every kernel set.
+    #[test]
+    fn fused_samples_are_the_slot_by_slot_rows() {
+        let registry = Registry::with_builtins();
+        let n = 203;
+        for (shape, description) in SHAPES[..5].iter().enumerate() {
+            let material = crate::json::material_from_json(&registry, description, 0.001).unwrap();
+            let lanes = TestLanes::new(0x5eed + shape as u32, n);
+            let overrides = lanes.overrides(shape == 1);
+            let input = lanes.input(&material, &overrides, true);
+            let u = lanes.randoms();
+            let all: Vec<u32> = (0..n as u32).collect();
             let len = padded(n);
             for kernels in Kernels::available() {
                 let [mut fused, mut by_slot] = [Scratch::default(), Scratch::default()];
                 for s in [&mut fused, &mut by_slot] {
                     s.reserve_rows(len).unwrap();
                     let mut failure = LaneError::default();
-                    stage_sample(kernels, &input, &u, &lanes, len, s, &mut failure).unwrap();
+                    stage_sample(kernels, &input, &u, &all, len, s, &mut failure).unwrap();
                     assert!(failure.take().is_none());
                 }
                 assert!(sample_fused(kernels, &material, len, &mut fused));

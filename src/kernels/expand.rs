@@ -9,7 +9,11 @@
 //! Each step is the closure's (`materials::compiled::emit`), operation for operation,
 //! so the rows hold the bits a closure per lane would.
 
-use super::{load, load_frame, load3, material_rows, store, store_frame, unit_in_range};
+use super::fused::{self, MAX_FUSED, Shape, Term};
+use super::mixture::clamp_random;
+use super::{
+    FinishOutput, load, load_frame, load3, material_rows, store, store_frame, unit_in_range,
+};
 use crate::error::Error;
 use crate::lobes::{MAX_DECODED_LEN, Model, Params, Transport};
 use crate::materials::compiled::{DecodedBlock, MAX_MATERIAL_PARAMS};
@@ -46,6 +50,9 @@ pub struct ExpandJob<'a> {
     pub kept: [bool; MAX_SLOTS],
     /// The material's eval at each lane's `wi`, in the same pass.
     pub eval: Option<ExpandEval<'a>>,
+    /// With [`ExpandLanes::Raw`] and slots that are a fused shape: each lane's sample,
+    /// in the same pass.
+    pub sample: Option<ExpandSample<'a>>,
     /// With [`ExpandLanes::Raw`] and no `eval`: rows the samplers read, written in the
     /// same pass as the staged path writes them.
     pub staged: Option<StagedRows<'a>>,
@@ -105,6 +112,47 @@ pub struct ExpandEval<'a> {
     pub wi: [&'a [f32]; 3],
     pub value: Option<[&'a mut [f32]; 3]>,
     pub pdf: &'a mut [f32],
+}
+
+/// A sample in the expansion's pass: each lane's slot chosen by its selection
+/// probabilities ([`material_rows::choose_register`], the choice `Closure::sample`
+/// makes), sampled, every slot evaluated there and the sample finished into the
+/// caller's rows ([`fused::sample_finished`], the arithmetic of the staged path's
+/// `kernels::fused::rows` and `finish_mixture`). A slot dropped on a lane has weight
+/// and probability 0 there: it adds `0 f` and `0 pdf`.
+pub struct ExpandSample<'a> {
+    /// The caller's random numbers: the slot choice, then the direction's two
+    /// dimensions. A lane with one not finite makes the job's outputs not valid
+    /// (`out_of_range`), as the staged path fails that lane.
+    pub u: [&'a [f32]; 3],
+    pub out: FinishOutput<'a>,
+}
+
+/// One register of an [`ExpandSample`], as [`SlotModels::sample_fused`] takes it.
+pub struct SlotSample<'r, 'o, L: Lane> {
+    /// Each slot's decoded block.
+    decoded: &'r [[L; MAX_DECODED_LEN]; MAX_SLOTS],
+    terms: [Term<L>; MAX_FUSED],
+    /// Each lane's chosen slot, its frame and local `wo`, and its random numbers.
+    chosen: L,
+    at: (LaneFrame<L>, Vec3<L>),
+    u: [L; 3],
+    out: &'r mut FinishOutput<'o>,
+    /// The register's first lane and lane count.
+    lanes: (usize, usize),
+}
+
+/// [`SlotModels::sample_fused`] of slots that are the fused shape `S`.
+#[inline(always)]
+pub fn sample_slots<S: Shape, L: Lane>(r: SlotSample<'_, '_, L>) -> bool {
+    let mut params = [Params::shared(&[]); MAX_FUSED];
+    for (p, decoded) in params.iter_mut().zip(r.decoded).take(S::LOBES) {
+        *p = Params::new(decoded);
+    }
+    let p = S::prepare(&params);
+    let register = (r.chosen, r.at, r.u);
+    fused::sample_finished::<S, L>(&p, &r.terms, register, Transport::Radiance, r.out, r.lanes);
+    true
 }
 
 /// One register's slots: decoded (into the rows, when wanted), estimated.
@@ -401,7 +449,7 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             every_emitted &= emitted.any();
         }
         let alone = weighted.le(L::one()).all();
-        let rows = job.eval.is_none().then_some(&mut *job.decoded);
+        let rows = (job.eval.is_none() && job.sample.is_none()).then_some(&mut *job.decoded);
         macro_rules! slots {
             ($by_slot:literal) => {
                 stage_slots::<M, L, $by_slot>(Slots {
@@ -426,6 +474,36 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
         let probability = material_rows::select(count, job.prune, &share, &mut weight);
         for (kept, p) in job.kept[..count].iter_mut().zip(&probability) {
             *kept |= p.gt(L::zero()).any();
+        }
+        if let Some(sample) = job.sample.as_mut() {
+            let u_lobe = load::<L>(sample.u[0], i, n, 0.5);
+            let u0 = load::<L>(sample.u[1], i, n, 0.5);
+            let u1 = load::<L>(sample.u[2], i, n, 0.5);
+            in_range = in_range & u_lobe.is_finite() & u0.is_finite() & u1.is_finite();
+            let (chosen, reused) = material_rows::choose_register(&probability[..count], u_lobe);
+            let mut terms = [Term {
+                weight: Rgb::zero(),
+                probability: L::zero(),
+            }; MAX_FUSED];
+            for (k, t) in terms.iter_mut().enumerate().take(count) {
+                *t = Term {
+                    weight: weight[k],
+                    probability: probability[k],
+                };
+            }
+            let taken = M::Slots::sample_fused(SlotSample {
+                decoded: &decoded,
+                terms,
+                chosen,
+                at: (frame, ctx.wo),
+                u: [reused, clamp_random(u0), clamp_random(u1)],
+                out: &mut sample.out,
+                lanes: (i, n),
+            });
+            if !taken {
+                in_range = L::Mask::splat(false);
+            }
+            continue;
         }
         let Some(eval) = job.eval.as_mut() else {
             for k in 0..count {

@@ -412,18 +412,35 @@ fn sample_lanes<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
         };
         let u = [reused, clamp_random(u0), clamp_random(u1)];
         let at = (frame, frame.to_local(wo));
-        let r = sample_register::<S, L>(&p, &terms, (chosen, &LOBE_LABELS), at, u, job.mode);
-        let (value, pdf) = mixture::sampled(
-            r.sample.delta,
-            (r.own_value, r.own_pdf),
-            L::one(),
-            #[inline(always)]
-            || (r.value, r.pdf),
-        );
-        let c = mixture::finish(&r.sample, value, pdf);
-        store_finished(&c, chosen, &mut job.out, i, n);
+        sample_finished::<S, L>(&p, &terms, (chosen, at, u), job.mode, &mut job.out, (i, n));
     }
     true
+}
+
+/// One register of a mixture sample: each lane samples lobe `chosen` (an index into
+/// the shape's lobes) at `(frame, local wo)` with `u` (the rescaled lobe choice, then
+/// the direction's two dimensions), every lobe is evaluated there
+/// ([`sample_register`]), and the sample is finished (`mixture::finish`) into `out`'s
+/// lanes `i..i + n`, the lobe output being `chosen`.
+#[inline(always)]
+pub fn sample_finished<S: Shape, L: Lane>(
+    p: &S::Prepared<L>,
+    terms: &[Term<L>; MAX_FUSED],
+    (chosen, at, u): (L, (LaneFrame<L>, Vec3<L>), [L; 3]),
+    mode: Transport,
+    out: &mut FinishOutput<'_>,
+    (i, n): (usize, usize),
+) {
+    let r = sample_register::<S, L>(p, terms, (chosen, &LOBE_LABELS), at, u, mode);
+    let (value, pdf) = mixture::sampled(
+        r.sample.delta,
+        (r.own_value, r.own_pdf),
+        L::one(),
+        #[inline(always)]
+        || (r.value, r.pdf),
+    );
+    let c = mixture::finish(&r.sample, value, pdf);
+    store_finished(&c, chosen, out, i, n);
 }
 
 /// One slot of a fused sample over a material batch's rows: its decoded blocks, weights

@@ -144,43 +144,55 @@ pub struct ChooseJob<'a> {
     pub chosen: &'a mut [f32],
 }
 
-/// `mixture::choose` with a probability row per lane: the same bins, the same
-/// round-off rule; a lane without any slot to choose gets slot 0 and `u` 0.5 (as
-/// the scalar loop it replaces).
+/// `mixture::choose` with a probability row per lane ([`choose_register`]).
 #[inline(always)]
 fn choose_body<L: Lane>(job: &mut ChooseJob<'_>) {
     let len = job.len;
     for i in (0..len).step_by(L::LANES) {
-        let x = L::load(&job.u[i..]);
-        // A NaN `u` clamps to 0, as `f32::max` takes it.
-        let u = clamp_random(L::select(x.ge(L::zero()), x, L::zero()));
-        let mut found = L::Mask::splat(false);
-        let mut any = L::Mask::splat(false);
-        let (mut index, mut start, mut width) = (L::zero(), L::zero(), L::zero());
-        let (mut last, mut p_last) = (L::zero(), L::zero());
-        let mut end = L::zero();
-        for k in 0..job.count {
-            let p = L::load(&job.probability[k * len + i..]);
-            let bin_start = end;
-            end += p;
-            let positive = p.gt(L::zero());
-            let hit = positive & !found & u.lt(end);
-            let slot = L::splat(k as f32);
-            index = L::select(hit, slot, index);
-            start = L::select(hit, bin_start, start);
-            width = L::select(hit, p, width);
-            found = found | hit;
-            last = L::select(positive, slot, last);
-            p_last = L::select(positive, p, p_last);
-            any = any | positive;
+        let mut probability = [L::zero(); MAX_SLOTS];
+        for (k, p) in probability[..job.count].iter_mut().enumerate() {
+            *p = L::load(&job.probability[k * len + i..]);
         }
-        index = L::select(found, index, last);
-        start = L::select(found, start, L::one() - p_last);
-        width = L::select(found, width, p_last);
-        let reused = clamp_random((u - start) / width);
-        L::select(any, index, L::zero()).store(&mut job.chosen[i..]);
-        L::select(any, reused, L::splat(0.5)).store(&mut job.u[i..]);
+        let (chosen, reused) = choose_register(&probability[..job.count], L::load(&job.u[i..]));
+        chosen.store(&mut job.chosen[i..]);
+        reused.store(&mut job.u[i..]);
     }
+}
+
+/// `mixture::choose` with each lane's own slot probabilities: the slot `x` chooses
+/// and `x` rescaled within its bin, by the same bins and round-off rule; a lane
+/// without any slot to choose gets slot 0 and 0.5 (as the scalar loop it replaces).
+#[inline(always)]
+pub fn choose_register<L: Lane>(probability: &[L], x: L) -> (L, L) {
+    // A NaN `u` clamps to 0, as `f32::max` takes it.
+    let u = clamp_random(L::select(x.ge(L::zero()), x, L::zero()));
+    let mut found = L::Mask::splat(false);
+    let mut any = L::Mask::splat(false);
+    let (mut index, mut start, mut width) = (L::zero(), L::zero(), L::zero());
+    let (mut last, mut p_last) = (L::zero(), L::zero());
+    let mut end = L::zero();
+    for (k, &p) in probability.iter().enumerate() {
+        let bin_start = end;
+        end += p;
+        let positive = p.gt(L::zero());
+        let hit = positive & !found & u.lt(end);
+        let slot = L::splat(k as f32);
+        index = L::select(hit, slot, index);
+        start = L::select(hit, bin_start, start);
+        width = L::select(hit, p, width);
+        found = found | hit;
+        last = L::select(positive, slot, last);
+        p_last = L::select(positive, p, p_last);
+        any = any | positive;
+    }
+    index = L::select(found, index, last);
+    start = L::select(found, start, L::one() - p_last);
+    width = L::select(found, width, p_last);
+    let reused = clamp_random((u - start) / width);
+    (
+        L::select(any, index, L::zero()),
+        L::select(any, reused, L::splat(0.5)),
+    )
 }
 
 /// The chosen slot's selection probability times its own sample's pdf, in place in

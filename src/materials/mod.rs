@@ -26,7 +26,7 @@ pub use compiled::{Material, Override};
 
 use crate::closure::{Closure, MAX_LOBES};
 use crate::error::Error;
-use crate::kernels::expand::ExpandJob;
+use crate::kernels::expand::{ExpandJob, SlotSample, sample_slots};
 use crate::lobes::{Model, Params, VerifyCase};
 use crate::math::{Frame, Lane, Rgb, Vec3};
 use crate::params::ParamSpec;
@@ -144,6 +144,13 @@ pub trait SlotModels: 'static {
     /// `visitor.slot::<M>(k)` for each slot `k` in order, with `M` its model; stops at
     /// the first error.
     fn visit(visitor: &mut impl SlotVisitor) -> Result<(), Error>;
+    /// Whether the slots are a fused shape (2 to
+    /// [`MAX_FUSED`](crate::kernels::fused::MAX_FUSED) of them), which a
+    /// material batch samples in its expansion's pass.
+    const FUSED: bool;
+    /// One register's sample in the expansion's pass ([`sample_slots`]);
+    /// false, and nothing written, when the slots are not a fused shape.
+    fn sample_fused<L: Lane>(register: SlotSample<'_, '_, L>) -> bool;
 }
 
 /// What [`SlotModels::visit`] calls per slot.
@@ -152,7 +159,7 @@ pub trait SlotVisitor {
 }
 
 macro_rules! slot_models {
-    ($($m:ident $k:literal),+) => {
+    ($fused:literal, $sample:ident; $($m:ident $k:literal),+) => {
         impl<$($m: Model),+> SlotModels for ($($m,)+) {
             const NAMES: &'static [&'static str] = &[$($m::NAME),+];
             fn models() -> Vec<TypeId> {
@@ -163,18 +170,31 @@ macro_rules! slot_models {
                 $(visitor.slot::<$m>($k)?;)+
                 Ok(())
             }
+            const FUSED: bool = $fused;
+            #[inline(always)]
+            fn sample_fused<L: Lane>(register: SlotSample<'_, '_, L>) -> bool {
+                $sample::<Self, L>(register)
+            }
         }
     };
 }
 
-slot_models!(A 0);
-slot_models!(A 0, B 1);
-slot_models!(A 0, B 1, C 2);
-slot_models!(A 0, B 1, C 2, D 3);
-slot_models!(A 0, B 1, C 2, D 3, E 4);
-slot_models!(A 0, B 1, C 2, D 3, E 4, F 5);
-slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6);
-slot_models!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7);
+/// [`SlotModels::sample_fused`] of slots that are not a fused shape (`S`, unused,
+/// keeps the macro's one call form with [`sample_slots`]).
+#[allow(clippy::extra_unused_type_parameters)]
+#[inline(always)]
+fn not_fused<S, L: Lane>(_register: SlotSample<'_, '_, L>) -> bool {
+    false
+}
+
+slot_models!(false, not_fused; A 0);
+slot_models!(true, sample_slots; A 0, B 1);
+slot_models!(true, sample_slots; A 0, B 1, C 2);
+slot_models!(true, sample_slots; A 0, B 1, C 2, D 3);
+slot_models!(false, not_fused; A 0, B 1, C 2, D 3, E 4);
+slot_models!(false, not_fused; A 0, B 1, C 2, D 3, E 4, F 5);
+slot_models!(false, not_fused; A 0, B 1, C 2, D 3, E 4, F 5, G 6);
+slot_models!(false, not_fused; A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7);
 
 /// A material type as the registry sees it: object-safe, scalar.
 pub trait MaterialType: Send + Sync {
@@ -199,6 +219,9 @@ pub trait MaterialType: Send + Sync {
     /// `expand` over staged lanes in SIMD, each slot decoded, estimated, pruned and
     /// selected, and with `job.eval` the eval too (material batches: `kernels::expand`).
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>);
+    /// Whether `expand_lanes` takes a sample in its pass (`job.sample`): the slots
+    /// are a fused shape ([`SlotModels::FUSED`]).
+    fn samples_in_pass(&self) -> bool;
 }
 
 /// The [`MaterialType`] of a built-in [`MaterialModel`].
@@ -253,6 +276,9 @@ impl<M: MaterialModel> MaterialType for BuiltinMaterial<M> {
     }
     fn expand_lanes(&self, kernels: Kernels, job: &mut ExpandJob<'_>) {
         crate::kernels::expand::expand::<M>(kernels, job);
+    }
+    fn samples_in_pass(&self) -> bool {
+        M::Slots::FUSED
     }
 }
 
