@@ -243,6 +243,7 @@ fn stage_chunk(
         probability: grow(&mut rows.probability, MAX_SLOTS * len),
         kept: [false; MAX_SLOTS],
         sample: None,
+        albedo: None,
         eval: eval.filter(|e| e.in_pass).map(|e| ExpandEval {
             wi: view3(&s.wi, len),
             value: e.want_value.then(|| rows3(&mut s.value, len)),
@@ -808,19 +809,25 @@ fn eval_raw(
         value,
         pdf: &mut out.pdf[at],
     };
-    let mut job = raw_pass_job(input, &lanes, overrides, Some(eval), None);
+    let mut job = raw_pass_job(input, &lanes, overrides, (Some(eval), None, None));
     material.kind().expand_lanes(kernels, &mut job);
     !job.out_of_range
 }
 
+/// What an expansion finishes in its pass: an eval, a sample or an albedo.
+type InPass<'a> = (
+    Option<ExpandEval<'a>>,
+    Option<ExpandSample<'a>>,
+    Option<[&'a mut [f32]; 3]>,
+);
+
 /// An expansion of the caller's consecutive `lanes` ([`raw_expand_lanes`]) that
-/// finishes an eval or a sample in its pass, writing no rows.
+/// finishes an eval, a sample or an albedo in its pass, writing no rows.
 fn raw_pass_job<'a>(
     input: &MaterialInput<'a>,
     lanes: &Range<usize>,
     overrides: &'a [Option<RawValue<'a>>],
-    eval: Option<ExpandEval<'a>>,
-    sample: Option<ExpandSample<'a>>,
+    (eval, sample, albedo): InPass<'a>,
 ) -> ExpandJob<'a> {
     let material = input.material;
     ExpandJob {
@@ -835,6 +842,7 @@ fn raw_pass_job<'a>(
         kept: [false; MAX_SLOTS],
         eval,
         sample,
+        albedo,
         staged: None,
         out_of_range: false,
     }
@@ -875,6 +883,7 @@ fn stage_raw(
         probability: grow(&mut rows.probability, MAX_SLOTS * len),
         kept: [false; MAX_SLOTS],
         sample: None,
+        albedo: None,
         eval: None,
         staged: Some(StagedRows {
             frame: grow(&mut rows.frame, 9 * len),
@@ -892,41 +901,86 @@ fn stage_raw(
 pub fn albedo(exec: &Exec<'_>, input: &MaterialInput<'_>, out: Soa3Mut<'_>) -> Result<(), Error> {
     input.check()?;
     out.check(input.count, "albedo")?;
-    run_blocks(exec, input.count, out, |start, out| {
+    run_blocks(exec, input.count, out, |start, mut out| {
         let end = (start + super::BLOCK).min(input.count);
+        // Every lane active: the block in one pass (`albedo_raw`); when some lane needs
+        // staging, the chunks below redo the block.
+        if input.active.is_none() && albedo_raw(exec.kernels, input, start..end, start, &mut out) {
+            return Ok(());
+        }
         let mut failure = LaneError::default();
         with_scratch(|s| {
             for_chunks(input, start..end, s, |lanes, s| {
-                let len = padded(lanes.len());
-                stage_chunk(exec.kernels, input, lanes, len, s, &mut failure, None)?;
-                // The kept slots' `weight * albedo` (a dropped slot's weight is 0 on its
-                // lane); pruning weighed them by estimates.
-                let live = s.material.live;
-                slot_albedos(exec.kernels, input.material, len, s, &live);
-                let sum = rows3(&mut s.value, len);
-                let rows = &s.material;
-                for row in sum {
-                    row.fill(0.0);
+                if let Some(range) = consecutive(lanes)
+                    && albedo_raw(exec.kernels, input, range, start, &mut out)
+                {
+                    return Ok(());
                 }
-                for k in (0..input.material.slots().len()).filter(|&k| rows.live[k]) {
-                    let p = &rows.probability[k * len..][..len];
-                    for (c, sum) in s.value.iter_mut().enumerate() {
-                        let a = &rows.albedo[(3 * k + c) * len..][..len];
-                        // Zipped slices of one length: no bounds checks, so it vectorizes
-                        // (indexed, this loop was 23% of a Disney material's albedo).
-                        for ((sum, &a), &p) in sum[..len].iter_mut().zip(a).zip(p) {
-                            *sum += if p > 0.0 { a } else { 0.0 };
-                        }
-                    }
-                }
-                for (staged, out) in s.value.iter().zip([&mut *out.x, &mut *out.y, &mut *out.z]) {
-                    scatter(lanes, start, &s.failed, staged, out);
-                }
-                Ok(())
+                albedo_chunk(exec.kernels, input, lanes, start, s, &mut failure, &mut out)
             })
         })?;
         failure.take().map_or(Ok(()), Err)
     })
+}
+
+/// The albedos of a chunk's lanes, staged: each kept slot's `weight * albedo` (a
+/// dropped slot's weight is 0 on its lane; pruning weighed them by estimates) from
+/// the slots' rows, summed in slot order.
+fn albedo_chunk(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    lanes: &[u32],
+    start: usize,
+    s: &mut Scratch,
+    failure: &mut LaneError,
+    out: &mut Soa3Mut<'_>,
+) -> Result<(), Error> {
+    let len = padded(lanes.len());
+    stage_chunk(kernels, input, lanes, len, s, failure, None)?;
+    let live = s.material.live;
+    slot_albedos(kernels, input.material, len, s, &live);
+    let sum = rows3(&mut s.value, len);
+    let rows = &s.material;
+    for row in sum {
+        row.fill(0.0);
+    }
+    for k in (0..input.material.slots().len()).filter(|&k| rows.live[k]) {
+        let p = &rows.probability[k * len..][..len];
+        for (c, sum) in s.value.iter_mut().enumerate() {
+            let a = &rows.albedo[(3 * k + c) * len..][..len];
+            // Zipped slices of one length: no bounds checks, so it vectorizes
+            // (indexed, this loop was 23% of a Disney material's albedo).
+            for ((sum, &a), &p) in sum[..len].iter_mut().zip(a).zip(p) {
+                *sum += if p > 0.0 { a } else { 0.0 };
+            }
+        }
+    }
+    for (staged, out) in s.value.iter().zip([&mut *out.x, &mut *out.y, &mut *out.z]) {
+        scatter(lanes, start, &s.failed, staged, out);
+    }
+    Ok(())
+}
+
+/// The albedos of consecutive lanes from the caller's arrays straight into the
+/// outputs, in the expansion's pass ([`ExpandJob::albedo`]): no copies, no rows. False,
+/// and the outputs of the lanes not valid, as [`sample_raw`].
+fn albedo_raw(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    lanes: Range<usize>,
+    start: usize,
+    out: &mut Soa3Mut<'_>,
+) -> bool {
+    let mut overrides = [None; MAX_MATERIAL_PARAMS];
+    let overrides = &mut overrides[..input.material.params().len()];
+    let Some(lanes) = raw_range(input, lanes, overrides) else {
+        return false;
+    };
+    let at = lanes.start - start..lanes.end - start;
+    let rows = [&mut *out.x, &mut *out.y, &mut *out.z].map(|row| &mut row[at.clone()]);
+    let mut job = raw_pass_job(input, &lanes, overrides, (None, None, Some(rows)));
+    input.material.kind().expand_lanes(kernels, &mut job);
+    !job.out_of_range
 }
 
 /// Sample the material at every active lane: choose a slot with `u_lobe` (by the
@@ -1005,7 +1059,7 @@ fn sample_raw(
         u: [u.u_lobe, u.u0, u.u1].map(|row| &row[lanes.clone()]),
         out: out.finish_rows(&local),
     };
-    let mut job = raw_pass_job(input, &lanes, overrides, None, Some(sample));
+    let mut job = raw_pass_job(input, &lanes, overrides, (None, Some(sample), None));
     material.kind().expand_lanes(kernels, &mut job);
     !job.out_of_range
 }
@@ -1540,6 +1594,56 @@ mod tests {
                 assert!(!run(&lanes, true).0, "{what}");
                 assert!(!run(&lanes, false).0, "{what}");
                 lanes.u[1][17] = keep;
+            }
+        }
+    }
+
+    /// An albedo in the expansion's pass (`albedo_raw`) is the staged path's
+    /// (`albedo_chunk`: rows, each slot's albedo kernel, the sum), bit for bit, for each
+    /// of the [`SHAPES`], per-lane roughness, normals and views on both hemispheres, on
+    /// every kernel set; a lane with a NaN view leaves the chunk to the staged path,
+    /// which fails it.
+    #[test]
+    fn albedos_in_the_expansion_pass_are_the_staged_albedos() {
+        let registry = Registry::with_builtins();
+        let n = 203;
+        for (shape, description) in SHAPES.iter().enumerate() {
+            let material = crate::json::material_from_json(&registry, description, 0.001).unwrap();
+            let mut lanes = TestLanes::new(0xa1be + shape as u32, n);
+            let all: Vec<u32> = (0..n as u32).collect();
+            for kernels in Kernels::available() {
+                let what = format!("{description} on {}", kernels.isa().name());
+                let run = |lanes: &TestLanes, in_pass: bool| -> (bool, Vec<Vec<u32>>) {
+                    let overrides = lanes.overrides(shape == 1);
+                    let input = lanes.input(&material, &overrides, false);
+                    let mut rows = [0; 3].map(|_| vec![0.0f32; n]);
+                    let [x, y, z] = &mut rows;
+                    let mut out = Soa3Mut { x, y, z };
+                    let taken = if in_pass {
+                        albedo_raw(kernels, &input, 0..n, 0, &mut out)
+                    } else {
+                        let mut s = Scratch::default();
+                        let mut failure = LaneError::default();
+                        albedo_chunk(kernels, &input, &all, 0, &mut s, &mut failure, &mut out)
+                            .unwrap();
+                        failure.take().is_none()
+                    };
+                    let bits = |row: &Vec<f32>| row.iter().map(|v| v.to_bits()).collect();
+                    (taken, rows.iter().map(bits).collect())
+                };
+                let (taken, in_pass) = run(&lanes, true);
+                assert!(taken, "{what}");
+                assert_eq!(in_pass, run(&lanes, false).1, "{what}");
+                let lit = in_pass[0]
+                    .iter()
+                    .filter(|&&a| f32::from_bits(a) > 0.0)
+                    .count();
+                assert!(lit > n / 4, "{lit} lanes with an albedo: {what}");
+                let keep = lanes.wo[0][30];
+                lanes.wo[0][30] = f32::NAN;
+                assert!(!run(&lanes, true).0, "{what}");
+                assert!(!run(&lanes, false).0, "{what}");
+                lanes.wo[0][30] = keep;
             }
         }
     }

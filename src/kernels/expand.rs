@@ -53,6 +53,10 @@ pub struct ExpandJob<'a> {
     /// With [`ExpandLanes::Raw`] and slots that are a fused shape: each lane's sample,
     /// in the same pass.
     pub sample: Option<ExpandSample<'a>>,
+    /// The material's directional albedo, `sum_k weight_k albedo_k(wo)` over the kept
+    /// slots in slot order (what the staged path sums from the slots' albedo rows),
+    /// into these rows in the same pass.
+    pub albedo: Option<[&'a mut [f32]; 3]>,
     /// With [`ExpandLanes::Raw`] and no `eval`: rows the samplers read, written in the
     /// same pass as the staged path writes them.
     pub staged: Option<StagedRows<'a>>,
@@ -323,6 +327,30 @@ type SlotTerms<'j, L> = (
     &'j [L; MAX_SLOTS],
 );
 
+/// One register's albedo sum over its slots kept on some lane ([`ExpandJob::albedo`]).
+struct AlbedoSlots<'j, L> {
+    decoded: &'j [[L; MAX_DECODED_LEN]; MAX_SLOTS],
+    weight: &'j [Rgb<L>; MAX_SLOTS],
+    probability: &'j [L; MAX_SLOTS],
+    wo: Vec3<L>,
+    sum: Rgb<L>,
+}
+
+impl<L: Lane> SlotVisitor for AlbedoSlots<'_, L> {
+    #[inline(always)]
+    fn slot<M: Model>(&mut self, k: usize) -> Result<(), Error> {
+        let kept = self.probability[k].gt(L::zero());
+        // A slot kept on no lane adds zeros: nothing (its tables are not read).
+        if !kept.any() {
+            return Ok(());
+        }
+        let p = M::prepare(Params::new(&self.decoded[k][..M::DECODED_LEN]));
+        let albedo = self.weight[k] * M::albedo(&p, self.wo, Transport::Radiance);
+        self.sum = self.sum + Rgb::select(kept, albedo, Rgb::zero());
+        Ok(())
+    }
+}
+
 /// [`EvalSlots`]' sums at `(wo, wi)`.
 #[inline(always)]
 fn eval_sums<M: MaterialModel, L: Lane, const SKIP_DROPPED: bool>(
@@ -449,7 +477,8 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             every_emitted &= emitted.any();
         }
         let alone = weighted.le(L::one()).all();
-        let rows = (job.eval.is_none() && job.sample.is_none()).then_some(&mut *job.decoded);
+        let in_pass = job.eval.is_some() || job.sample.is_some() || job.albedo.is_some();
+        let rows = (!in_pass).then_some(&mut *job.decoded);
         macro_rules! slots {
             ($by_slot:literal) => {
                 stage_slots::<M, L, $by_slot>(Slots {
@@ -474,6 +503,20 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
         let probability = material_rows::select(count, job.prune, &share, &mut weight);
         for (kept, p) in job.kept[..count].iter_mut().zip(&probability) {
             *kept |= p.gt(L::zero()).any();
+        }
+        if let Some(rows) = job.albedo.as_mut() {
+            let mut sums = AlbedoSlots {
+                decoded: &decoded,
+                weight: &weight,
+                probability: &probability,
+                wo: ctx.wo,
+                sum: Rgb::zero(),
+            };
+            M::Slots::visit(&mut sums).expect("an albedo does not fail");
+            for (v, row) in sums.sum.to_array().into_iter().zip(rows.iter_mut()) {
+                store(v, row, i, n);
+            }
+            continue;
         }
         if let Some(sample) = job.sample.as_mut() {
             let u_lobe = load::<L>(sample.u[0], i, n, 0.5);
