@@ -1518,134 +1518,136 @@ mod tests {
         Soa3 { x, y, z }
     }
 
-    /// A sample in the expansion's pass (`sample_raw`) writes every output the staged
-    /// path (`sample_chunk`: rows, the fused rows kernel, `finish_mixture`) writes, with
-    /// the same bits, for each of the [`SHAPES`], per-lane roughness, normals and views
-    /// on both hemispheres, on every kernel set; a lane with a random number not finite
-    /// leaves the chunk to the staged path.
-    #[test]
-    fn samples_in_the_expansion_pass_are_the_staged_samples() {
+    /// One path's outputs for [`in_pass_is_staged`]: whether it took the lanes, and
+    /// every output row as bits.
+    type Outputs = (bool, Vec<Vec<u32>>);
+
+    /// For each of the [`SHAPES`] (per-lane roughness, normals and views on both
+    /// hemispheres) and kernel set, `run(material, coat, kernels, lanes, in_pass)`
+    /// gives the same bits in the expansion's pass as staged, with more than a quarter
+    /// of the lanes above 0 in output row `lit`; with `spoil` applied to the lanes the
+    /// pass does not take them and the staged path fails one.
+    fn in_pass_is_staged(
+        seed: u32,
+        lit: usize,
+        spoil: fn(&mut TestLanes),
+        run: impl Fn(&Material, bool, Kernels, &TestLanes, bool) -> Outputs,
+    ) {
         let registry = Registry::with_builtins();
         let n = 203;
         for (shape, description) in SHAPES.iter().enumerate() {
             let material = crate::json::material_from_json(&registry, description, 0.001).unwrap();
-            let mut lanes = TestLanes::new(0x5a3d + shape as u32, n);
-            let all: Vec<u32> = (0..n as u32).collect();
+            let lanes = TestLanes::new(seed + shape as u32, n);
+            let mut spoiled = TestLanes::new(seed + shape as u32, n);
+            spoil(&mut spoiled);
             for kernels in Kernels::available() {
                 let what = format!("{description} on {}", kernels.isa().name());
-                // Every output of one path, as bits, and whether it took the lanes.
-                let run = |lanes: &TestLanes, in_pass: bool| -> (bool, Vec<Vec<u32>>) {
-                    let overrides = lanes.overrides(shape == 1);
-                    let input = lanes.input(&material, &overrides, false);
-                    let mut f = [0; 12].map(|_| vec![0.0f32; n]);
-                    let mut k = [0; 3].map(|_| vec![0u32; n]);
-                    let [wx, wy, wz, pdf, wr, wg, wb, vr, vg, vb, eta, rough] = &mut f;
-                    let [flags, lobe, component] = &mut k;
-                    let mut out = SampleOutput {
-                        wi: Soa3Mut {
-                            x: wx,
-                            y: wy,
-                            z: wz,
-                        },
-                        pdf,
-                        weight: Soa3Mut {
-                            x: wr,
-                            y: wg,
-                            z: wb,
-                        },
-                        value: Some(Soa3Mut {
-                            x: vr,
-                            y: vg,
-                            z: vb,
-                        }),
-                        flags: Some(flags),
-                        lobe: Some(lobe),
-                        component: Some(component),
-                        eta: Some(eta),
-                        roughness: Some(rough),
-                    };
-                    let u = lanes.randoms();
-                    let taken = if in_pass {
-                        sample_raw(kernels, &input, &u, 0..n, 0, &mut out)
-                    } else {
-                        let mut s = Scratch::default();
-                        let mut failure = LaneError::default();
-                        sample_chunk(kernels, &input, &u, &all, 0, &mut s, &mut failure, &mut out)
-                            .unwrap();
-                        failure.take().is_none()
-                    };
-                    let bits = |row: &Vec<f32>| row.iter().map(|v| v.to_bits()).collect();
-                    (taken, f.iter().map(bits).chain(k).collect())
+                let go = |lanes: &TestLanes, in_pass| {
+                    run(&material, shape == 1, kernels, lanes, in_pass)
                 };
-                let (taken, in_pass) = run(&lanes, true);
+                let (taken, in_pass) = go(&lanes, true);
                 assert!(taken, "{what}");
-                let (_, staged) = run(&lanes, false);
+                let (_, staged) = go(&lanes, false);
                 for (k, (a, b)) in in_pass.iter().zip(&staged).enumerate() {
                     let lane = a.iter().zip(b).position(|(a, b)| a != b);
                     assert!(lane.is_none(), "output {k}, lane {lane:?}: {what}");
                 }
-                let valid = in_pass[3]
-                    .iter()
-                    .filter(|&&p| f32::from_bits(p) > 0.0)
-                    .count();
-                assert!(valid > n / 4, "{valid} valid samples: {what}");
-                let keep = lanes.u[1][17];
-                lanes.u[1][17] = f32::NAN;
-                assert!(!run(&lanes, true).0, "{what}");
-                assert!(!run(&lanes, false).0, "{what}");
-                lanes.u[1][17] = keep;
+                let above = in_pass[lit].iter().filter(|&&v| f32::from_bits(v) > 0.0);
+                assert!(above.count() > n / 4, "{what}");
+                assert!(!go(&spoiled, true).0, "{what}");
+                assert!(!go(&spoiled, false).0, "{what}");
             }
         }
     }
 
+    /// A sample in the expansion's pass (`sample_raw`) writes every output the staged
+    /// path (`sample_chunk`: rows, the fused rows kernel, `finish_mixture`) writes,
+    /// with the same bits ([`in_pass_is_staged`]); a lane with a random number not
+    /// finite leaves the chunk to the staged path.
+    #[test]
+    fn samples_in_the_expansion_pass_are_the_staged_samples() {
+        let spoil = |lanes: &mut TestLanes| lanes.u[1][17] = f32::NAN;
+        in_pass_is_staged(
+            0x5a3d,
+            3,
+            spoil,
+            |material, coat, kernels, lanes, in_pass| {
+                let overrides = lanes.overrides(coat);
+                let input = lanes.input(material, &overrides, false);
+                let n = input.count;
+                let mut f = [0; 12].map(|_| vec![0.0f32; n]);
+                let mut k = [0; 3].map(|_| vec![0u32; n]);
+                let [wx, wy, wz, pdf, wr, wg, wb, vr, vg, vb, eta, rough] = &mut f;
+                let [flags, lobe, component] = &mut k;
+                let mut out = SampleOutput {
+                    wi: Soa3Mut {
+                        x: wx,
+                        y: wy,
+                        z: wz,
+                    },
+                    pdf,
+                    weight: Soa3Mut {
+                        x: wr,
+                        y: wg,
+                        z: wb,
+                    },
+                    value: Some(Soa3Mut {
+                        x: vr,
+                        y: vg,
+                        z: vb,
+                    }),
+                    flags: Some(flags),
+                    lobe: Some(lobe),
+                    component: Some(component),
+                    eta: Some(eta),
+                    roughness: Some(rough),
+                };
+                let u = lanes.randoms();
+                let taken = if in_pass {
+                    sample_raw(kernels, &input, &u, 0..n, 0, &mut out)
+                } else {
+                    let (mut s, mut failure) = (Scratch::default(), LaneError::default());
+                    let all: Vec<u32> = (0..n as u32).collect();
+                    sample_chunk(kernels, &input, &u, &all, 0, &mut s, &mut failure, &mut out)
+                        .unwrap();
+                    failure.take().is_none()
+                };
+                let bits = |row: &Vec<f32>| row.iter().map(|v| v.to_bits()).collect();
+                (taken, f.iter().map(bits).chain(k).collect())
+            },
+        );
+    }
+
     /// An albedo in the expansion's pass (`albedo_raw`) is the staged path's
-    /// (`albedo_chunk`: rows, each slot's albedo kernel, the sum), bit for bit, for each
-    /// of the [`SHAPES`], per-lane roughness, normals and views on both hemispheres, on
-    /// every kernel set; a lane with a NaN view leaves the chunk to the staged path,
-    /// which fails it.
+    /// (`albedo_chunk`: rows, each slot's albedo kernel, the sum), bit for bit
+    /// ([`in_pass_is_staged`]); a lane with a NaN view leaves the chunk to the staged
+    /// path.
     #[test]
     fn albedos_in_the_expansion_pass_are_the_staged_albedos() {
-        let registry = Registry::with_builtins();
-        let n = 203;
-        for (shape, description) in SHAPES.iter().enumerate() {
-            let material = crate::json::material_from_json(&registry, description, 0.001).unwrap();
-            let mut lanes = TestLanes::new(0xa1be + shape as u32, n);
-            let all: Vec<u32> = (0..n as u32).collect();
-            for kernels in Kernels::available() {
-                let what = format!("{description} on {}", kernels.isa().name());
-                let run = |lanes: &TestLanes, in_pass: bool| -> (bool, Vec<Vec<u32>>) {
-                    let overrides = lanes.overrides(shape == 1);
-                    let input = lanes.input(&material, &overrides, false);
-                    let mut rows = [0; 3].map(|_| vec![0.0f32; n]);
-                    let [x, y, z] = &mut rows;
-                    let mut out = Soa3Mut { x, y, z };
-                    let taken = if in_pass {
-                        albedo_raw(kernels, &input, 0..n, 0, &mut out)
-                    } else {
-                        let mut s = Scratch::default();
-                        let mut failure = LaneError::default();
-                        albedo_chunk(kernels, &input, &all, 0, &mut s, &mut failure, &mut out)
-                            .unwrap();
-                        failure.take().is_none()
-                    };
-                    let bits = |row: &Vec<f32>| row.iter().map(|v| v.to_bits()).collect();
-                    (taken, rows.iter().map(bits).collect())
+        let spoil = |lanes: &mut TestLanes| lanes.wo[0][30] = f32::NAN;
+        in_pass_is_staged(
+            0xa1be,
+            0,
+            spoil,
+            |material, coat, kernels, lanes, in_pass| {
+                let overrides = lanes.overrides(coat);
+                let input = lanes.input(material, &overrides, false);
+                let n = input.count;
+                let mut rows = [0; 3].map(|_| vec![0.0f32; n]);
+                let [x, y, z] = &mut rows;
+                let mut out = Soa3Mut { x, y, z };
+                let taken = if in_pass {
+                    albedo_raw(kernels, &input, 0..n, 0, &mut out)
+                } else {
+                    let (mut s, mut failure) = (Scratch::default(), LaneError::default());
+                    let all: Vec<u32> = (0..n as u32).collect();
+                    albedo_chunk(kernels, &input, &all, 0, &mut s, &mut failure, &mut out).unwrap();
+                    failure.take().is_none()
                 };
-                let (taken, in_pass) = run(&lanes, true);
-                assert!(taken, "{what}");
-                assert_eq!(in_pass, run(&lanes, false).1, "{what}");
-                let lit = in_pass[0]
-                    .iter()
-                    .filter(|&&a| f32::from_bits(a) > 0.0)
-                    .count();
-                assert!(lit > n / 4, "{lit} lanes with an albedo: {what}");
-                let keep = lanes.wo[0][30];
-                lanes.wo[0][30] = f32::NAN;
-                assert!(!run(&lanes, true).0, "{what}");
-                assert!(!run(&lanes, false).0, "{what}");
-                lanes.wo[0][30] = keep;
-            }
-        }
+                let bits = |row: &Vec<f32>| row.iter().map(|v| v.to_bits()).collect();
+                (taken, rows.iter().map(bits).collect())
+            },
+        );
     }
 
     /// `sample_fused` fills every row `sample_slot_by_slot` fills with the same bits,
