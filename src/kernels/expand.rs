@@ -524,10 +524,7 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             let u1 = load::<L>(sample.u[2], i, n, 0.5);
             in_range = in_range & u_lobe.is_finite() & u0.is_finite() & u1.is_finite();
             let (chosen, reused) = material_rows::choose_register(&probability[..count], u_lobe);
-            let mut terms = [Term {
-                weight: Rgb::zero(),
-                probability: L::zero(),
-            }; MAX_FUSED];
+            let mut terms = [Term::zero(); MAX_FUSED];
             for (k, t) in terms.iter_mut().enumerate().take(count) {
                 *t = Term {
                     weight: weight[k],

@@ -60,7 +60,7 @@ pub struct Term<L> {
 impl<L: Lane> Term<L> {
     /// No weight (lobes a shape does not have).
     #[inline(always)]
-    fn zero() -> Self {
+    pub fn zero() -> Self {
         Term {
             weight: Rgb::zero(),
             probability: L::zero(),
