@@ -443,7 +443,7 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 }
                 let (normal, normal_ok) = unit_in_range(load3::<L>(*normal, at, n));
                 let (t, b) = duff_axes(normal);
-                let frame = LaneFrame { t, b, n: normal };
+                let frame = LaneFrame::new(t, b, normal);
                 let (wo, wo_ok) = unit_in_range(load3::<L>(*wo, at, n));
                 in_range = in_range & normal_ok & wo_ok;
                 if let Some(rows) = job.staged.as_mut() {

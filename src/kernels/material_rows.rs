@@ -25,7 +25,7 @@ fn frames_body<L: Lane>(normal: [&[f32]; 3], frame: &mut [f32]) {
             L::load(&normal[2][i..]),
         );
         let (t, b) = duff_axes(n);
-        store_frame(&LaneFrame { t, b, n }, frame, len, i);
+        store_frame(&LaneFrame::new(t, b, n), frame, len, i);
     }
 }
 

@@ -464,11 +464,11 @@ fn store_frame<L: Lane>(f: &LaneFrame<L>, frame: &mut [f32], stride: usize, i: u
 /// each x, y, z).
 #[inline(always)]
 fn load_frame<L: Lane>(frame: &[f32], stride: usize, i: usize) -> LaneFrame<L> {
-    LaneFrame {
-        t: load_axis(frame, stride, 0, i),
-        b: load_axis(frame, stride, 1, i),
-        n: load_axis(frame, stride, 2, i),
-    }
+    LaneFrame::new(
+        load_axis(frame, stride, 0, i),
+        load_axis(frame, stride, 1, i),
+        load_axis(frame, stride, 2, i),
+    )
 }
 
 /// Frame axis `axis` (rows `3 axis .. 3 axis + 2` of `stride` values) at lane `i`.

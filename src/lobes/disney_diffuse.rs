@@ -81,7 +81,10 @@ fn shape<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>) -> L {
     );
     let fss = fresnel_pair(p.roughness.mul_add(cos2_d, -L::one()), weights);
     let half = cos_i * L::splat(0.5);
-    let ss = L::splat(1.25) * fss.mul_add(cos_i.safe_div(cos_i + cos_o) - half, half);
+    // Where a direction is below the surface the sum may be 0: divided by 1 there, and
+    // selected away below.
+    let ratio = cos_i / L::select(ok, cos_i + cos_o, L::one());
+    let ss = L::splat(1.25) * fss.mul_add(ratio - half, half);
     let mixed = (fd * cos_i).mul_add(L::one() - p.subsurface, ss * p.subsurface);
     L::select(ok, mixed, L::zero())
 }

@@ -178,15 +178,14 @@ impl Model for DisneySpecular {
         let inv = L::one() / L::select(ok, q * q * a_i * a_o * b, L::one());
         let pdf = L::select(ok, L::splat(0.5) * n * a_i * a_o * inv, L::zero());
         let fh = half.fh;
-        let scale = n * wi.z * b * inv;
+        // Zero where not `ok`: the Schlick term is finite (fh and f0 in [0, 1]), so the
+        // value is the +0 a select of each channel would give.
+        let scale = L::select(ok, n * wi.z * b * inv, L::zero());
         let value = p.f0.map(
             #[inline(always)]
             |f0| (L::one() - f0).mul_add(fh, f0) * scale,
         );
-        Eval {
-            value: Rgb::select(ok, value, Rgb::zero()),
-            pdf,
-        }
+        Eval { value, pdf }
     }
 
     #[inline(always)]

@@ -1,8 +1,8 @@
 //! Orthonormal shading frames: each lobe of a closure carries its own
 //! (seed 000 "Layering": layers may have their own bumped normals).
 
-use super::Lane;
 use super::vec::{Vec3, inv_length};
+use super::{Lane, Mask};
 
 /// Tangent `t`, bitangent `b = n x t` and normal `n`, all unit length and orthogonal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,6 +113,9 @@ pub struct LaneFrame<L> {
     pub t: Vec3<L>,
     pub b: Vec3<L>,
     pub n: Vec3<L>,
+    /// Every lane's frame is [`Frame::IDENTITY`]: the rotations return a direction as
+    /// it is where that is what their products give ([`Self::passes`]).
+    pub identity: bool,
 }
 
 impl<L: Lane> LaneFrame<L> {
@@ -123,14 +126,41 @@ impl<L: Lane> LaneFrame<L> {
             t: v(f.t),
             b: v(f.b),
             n: v(f.n),
+            identity: *f == Frame::IDENTITY,
         }
+    }
+    /// Per-lane axes.
+    #[inline(always)]
+    pub fn new(t: Vec3<L>, b: Vec3<L>, n: Vec3<L>) -> Self {
+        LaneFrame {
+            t,
+            b,
+            n,
+            identity: false,
+        }
+    }
+    /// Whether the rotations give `v` itself: with the identity's axes each component
+    /// of `to_local` is `x 1 + (±0 + ±0)` and of `to_world` `(x 1 + ±0) + ±0`, which is
+    /// `x` unless `x` is zero (its sign then comes from the other components') or a
+    /// component is not finite (`inf 0`). A product of the components in `(0, inf)`
+    /// rules both out (one that underflows or overflows takes the products).
+    #[inline(always)]
+    fn passes(&self, v: Vec3<L>) -> bool {
+        let p = (v.x * v.y * v.z).abs();
+        self.identity && (p.gt(L::zero()) & p.lt(L::splat(f32::INFINITY))).all()
     }
     #[inline(always)]
     pub fn to_local(&self, v: Vec3<L>) -> Vec3<L> {
+        if self.passes(v) {
+            return v;
+        }
         Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
     }
     #[inline(always)]
     pub fn to_world(&self, v: Vec3<L>) -> Vec3<L> {
+        if self.passes(v) {
+            return v;
+        }
         self.t * v.x + self.b * v.y + self.n * v.z
     }
 }
@@ -169,4 +199,101 @@ pub fn duff_axes<L: Lane>(n: Vec3<L>) -> (Vec3<L>, Vec3<L>) {
         Vec3::new(L::one() + sign * n.x * n.x * a, sign * b, -(sign * n.x)),
         Vec3::new(b, sign + n.y * n.y * a, -n.y),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simd::{Kernels, kernel};
+
+    /// `to_local` and `to_world` of a splatted frame, each row of `v` one component.
+    #[inline(always)]
+    fn rotate_lanes<L: Lane>(frame: &Frame, v: &[Vec<f32>; 3], out: &mut [Vec<f32>; 6]) {
+        let axes = LaneFrame::<L>::splat(frame);
+        for i in (0..v[0].len()).step_by(L::LANES) {
+            let d = Vec3::new(
+                L::load(&v[0][i..]),
+                L::load(&v[1][i..]),
+                L::load(&v[2][i..]),
+            );
+            let (local, world) = (axes.to_local(d), axes.to_world(d));
+            let rows = [local.x, local.y, local.z, world.x, world.y, world.z];
+            for (row, r) in out.iter_mut().zip(rows) {
+                r.store(&mut row[i..]);
+            }
+        }
+    }
+
+    kernel!(rotate<>(frame: &Frame, v: &[Vec<f32>; 3], out: &mut [Vec<f32>; 6]) => rotate_lanes);
+
+    /// The identity frame's pass-through gives, on every ISA, the bits of the scalar
+    /// frame's products: zeros of either sign beside components of either sign,
+    /// components whose product underflows, infinities and NaN (NaN for NaN).
+    #[test]
+    fn the_identity_passes_directions_through_with_the_products_bits() {
+        let values = [
+            0.0,
+            -0.0,
+            0.6,
+            -0.6,
+            1.0,
+            -1.0,
+            1e-20,
+            -1e-30,
+            f32::MIN_POSITIVE / 4.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut v: [Vec<f32>; 3] = Default::default();
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    for (row, c) in v.iter_mut().zip([x, y, z]) {
+                        row.push(c);
+                    }
+                }
+            }
+        }
+        // Whole registers of every width.
+        while !v[0].len().is_multiple_of(16) {
+            for row in v.iter_mut() {
+                row.push(0.5);
+            }
+        }
+        let n = v[0].len();
+        let mut expected: [Vec<u32>; 6] = Default::default();
+        for ((&x, &y), &z) in v[0].iter().zip(&v[1]).zip(&v[2]) {
+            let d = Vec3::new(x, y, z);
+            let (local, world) = (Frame::IDENTITY.to_local(d), Frame::IDENTITY.to_world(d));
+            for (row, c) in expected
+                .iter_mut()
+                .zip([local.x, local.y, local.z, world.x, world.y, world.z])
+            {
+                row.push(c.to_bits());
+            }
+        }
+        for kernels in Kernels::available() {
+            let mut out: [Vec<f32>; 6] = std::array::from_fn(|_| vec![0.0; n]);
+            rotate(kernels, &Frame::IDENTITY, &v, &mut out);
+            for (k, (got, want)) in out.iter().zip(&expected).enumerate() {
+                for i in 0..n {
+                    // A NaN's sign and payload depend on the operands' order.
+                    let same = if f32::from_bits(want[i]).is_nan() {
+                        got[i].is_nan()
+                    } else {
+                        got[i].to_bits() == want[i]
+                    };
+                    assert!(
+                        same,
+                        "{:?}, output {k}, input ({}, {}, {})",
+                        kernels.isa(),
+                        v[0][i],
+                        v[1][i],
+                        v[2][i]
+                    );
+                }
+            }
+        }
+    }
 }
