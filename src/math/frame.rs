@@ -113,8 +113,9 @@ pub struct LaneFrame<L> {
     pub t: Vec3<L>,
     pub b: Vec3<L>,
     pub n: Vec3<L>,
-    /// Every lane's frame is [`Frame::IDENTITY`]: the rotations return a direction as
-    /// it is where that is what their products give ([`Self::passes`]).
+    /// Every lane's frame is [`Frame::IDENTITY`] (equal as floats: an axis component of
+    /// -0 gives the same products wherever [`Self::passes`] holds): the rotations
+    /// return a direction as it is where that is what their products give.
     pub identity: bool,
 }
 
@@ -227,8 +228,9 @@ mod tests {
     kernel!(rotate<>(frame: &Frame, v: &[Vec<f32>; 3], out: &mut [Vec<f32>; 6]) => rotate_lanes);
 
     /// The identity frame's pass-through gives, on every ISA, the bits of the scalar
-    /// frame's products: zeros of either sign beside components of either sign,
-    /// components whose product underflows, infinities and NaN (NaN for NaN).
+    /// frame's products, for the identity and a frame equal to it with -0 zeros: zeros
+    /// of either sign beside components of either sign, components whose product
+    /// underflows, infinities and NaN (NaN for NaN).
     #[test]
     fn the_identity_passes_directions_through_with_the_products_bits() {
         let values = [
@@ -262,36 +264,44 @@ mod tests {
             }
         }
         let n = v[0].len();
-        let mut expected: [Vec<u32>; 6] = Default::default();
-        for ((&x, &y), &z) in v[0].iter().zip(&v[1]).zip(&v[2]) {
-            let d = Vec3::new(x, y, z);
-            let (local, world) = (Frame::IDENTITY.to_local(d), Frame::IDENTITY.to_world(d));
-            for (row, c) in expected
-                .iter_mut()
-                .zip([local.x, local.y, local.z, world.x, world.y, world.z])
-            {
-                row.push(c.to_bits());
+        // The identity, and a frame equal to it as floats with every zero -0.
+        let signed = Frame {
+            t: Vec3::new(1.0, -0.0, -0.0),
+            b: Vec3::new(-0.0, 1.0, -0.0),
+            n: Vec3::new(-0.0, -0.0, 1.0),
+        };
+        for frame in [Frame::IDENTITY, signed] {
+            let mut expected: [Vec<u32>; 6] = Default::default();
+            for ((&x, &y), &z) in v[0].iter().zip(&v[1]).zip(&v[2]) {
+                let d = Vec3::new(x, y, z);
+                let (local, world) = (frame.to_local(d), frame.to_world(d));
+                for (row, c) in expected
+                    .iter_mut()
+                    .zip([local.x, local.y, local.z, world.x, world.y, world.z])
+                {
+                    row.push(c.to_bits());
+                }
             }
-        }
-        for kernels in Kernels::available() {
-            let mut out: [Vec<f32>; 6] = std::array::from_fn(|_| vec![0.0; n]);
-            rotate(kernels, &Frame::IDENTITY, &v, &mut out);
-            for (k, (got, want)) in out.iter().zip(&expected).enumerate() {
-                for i in 0..n {
-                    // A NaN's sign and payload depend on the operands' order.
-                    let same = if f32::from_bits(want[i]).is_nan() {
-                        got[i].is_nan()
-                    } else {
-                        got[i].to_bits() == want[i]
-                    };
-                    assert!(
-                        same,
-                        "{:?}, output {k}, input ({}, {}, {})",
-                        kernels.isa(),
-                        v[0][i],
-                        v[1][i],
-                        v[2][i]
-                    );
+            for kernels in Kernels::available() {
+                let mut out: [Vec<f32>; 6] = std::array::from_fn(|_| vec![0.0; n]);
+                rotate(kernels, &frame, &v, &mut out);
+                for (k, (got, want)) in out.iter().zip(&expected).enumerate() {
+                    for i in 0..n {
+                        // A NaN's sign and payload depend on the operands' order.
+                        let same = if f32::from_bits(want[i]).is_nan() {
+                            got[i].is_nan()
+                        } else {
+                            got[i].to_bits() == want[i]
+                        };
+                        assert!(
+                            same,
+                            "{:?}, {frame:?}, output {k}, input ({}, {}, {})",
+                            kernels.isa(),
+                            v[0][i],
+                            v[1][i],
+                            v[2][i]
+                        );
+                    }
                 }
             }
         }
