@@ -147,8 +147,12 @@ impl<L: Lane> LaneFrame<L> {
     /// rules both out (one that underflows or overflows takes the products).
     #[inline(always)]
     fn passes(&self, v: Vec3<L>) -> bool {
+        // The flag first: other frames pay for no product.
+        if !self.identity {
+            return false;
+        }
         let p = (v.x * v.y * v.z).abs();
-        self.identity && (p.gt(L::zero()) & p.lt(L::splat(f32::INFINITY))).all()
+        (p.gt(L::zero()) & p.lt(L::splat(f32::INFINITY))).all()
     }
     #[inline(always)]
     pub fn to_local(&self, v: Vec3<L>) -> Vec3<L> {
