@@ -1,7 +1,7 @@
 //! Fresnel reflectance: Schlick, exact dielectric, exact conductor, and
 //! Gulbrandsen's artist-friendly conductor parameterization.
 
-use crate::math::{Lane, Rgb, Vec3};
+use crate::math::{Lane, Mask, Rgb, Vec3};
 
 /// Generalized Schlick: `F0 + (F90 - F0) (1 - cos)^5` (Schlick 1994; seed 000's `FrnlBlend`).
 #[inline(always)]
@@ -18,43 +18,70 @@ pub fn schlick_weight<L: Lane>(cos_theta: L) -> L {
 }
 
 /// The half vector of a reflection pair of unit directions and what Disney's lobes
-/// take from it, from one square root and one division: once inlined, every lobe of a
-/// fused kernel that asks shares them.
+/// take from it, without normalizing it: the lobes' homogeneous forms of `h` (GGX's
+/// `q`, GTR1's denominator) take `wo + wi` as it is, so their divisions do not wait on
+/// a square root and a division (the longest chain of a fused Disney eval). Once
+/// inlined, every lobe of a fused kernel that asks shares it.
 #[derive(Clone, Copy)]
 pub struct HalfVector<L: Lane> {
-    /// `h = (wo + wi) / |wo + wi|`; 0 when `wo = -wi`.
-    pub h: Vec3<L>,
-    /// `|wo + wi| = 2 l.h`.
-    pub len: L,
+    /// `wo + wi` times [`Self::scale`]; 0 when `wo = -wi`.
+    pub sum: Vec3<L>,
+    /// `|sum|^2`: in [2^-6, 2^34) where the half vector exists.
+    pub sum_len2: L,
+    /// The power of two `sum` is `wo + wi` times: 1 unless `|wo + wi|^2 < 2^-6`, where
+    /// the homogeneous forms of a narrow lobe would leave the normal floats (GGX's
+    /// `q^2` scales as `|wo + wi|^4` and is as small as 1e-24 at unit length). A power
+    /// of two scales without rounding, so each lane's bits are those of the unscaled
+    /// form wherever that stays normal, whatever its neighbours.
+    pub scale: L,
     /// Burley's `FH = (1 - l.h)^5`.
     pub fh: L,
     /// Whether `wo + wi` is not 0.
     pub exists: L::Mask,
 }
 
+/// [`HalfVector::sum_len2`]'s floor: below it the sum is scaled.
+const SUM_LEN2_MIN: f32 = 1.0 / 64.0;
+
 impl<L: Lane> HalfVector<L> {
     /// With `len = |wo + wi|`, `l.h = len / 2` and `1 - l.h = |wo - wi|^2 / (2 (2 + len))`
-    /// (no cancellation as `l.h -> 1`); `1 / len` and `1 / (2 + len)` both come from
-    /// `r = 1 / (len (2 + len))`. Symmetric in `wo` and `wi`, so reciprocal to the last
-    /// bit. `len >= 3.7e-23` when not 0 (`len^2` is at least the smallest subnormal), so
-    /// `r` is finite.
+    /// (no cancellation as `l.h -> 1`). Symmetric in `wo` and `wi`, so reciprocal to the
+    /// last bit.
     #[inline(always)]
     pub fn of(wo: Vec3<L>, wi: Vec3<L>) -> Self {
-        let hu = wo + wi;
-        let len2 = hu.length_squared();
-        let exists = len2.gt(L::zero());
-        let len = len2.sqrt();
-        let wide = L::splat(2.0) + len;
-        let r = L::one().safe_div(len * wide);
-        let m = ((wo - wi).length_squared() * L::splat(0.5) * (len * r)).min(L::one());
+        let sum = wo + wi;
+        let len2 = sum.length_squared();
+        let m = ((wo - wi).length_squared() * L::splat(0.5) / (L::splat(2.0) + len2.sqrt()))
+            .min(L::one());
         let m2 = m * m;
+        let (sum, sum_len2, scale) = scaled(sum, len2);
         HalfVector {
-            h: hu * (wide * r),
-            len,
+            sum,
+            sum_len2,
+            scale,
             fh: m2 * m2 * m,
-            exists,
+            exists: len2.gt(L::zero()),
         }
     }
+}
+
+/// `(c sum, |c sum|^2, c)` with `c` the power of two that brings `|sum|^2 = len2` (0 <
+/// len2 < 2^-6) into [2^-6, 2^34), in steps of 2^20 (the smallest positive `len2`,
+/// 2^-149, takes four); `c = 1` elsewhere. The steps only run in registers with such a
+/// lane (nearly opposite directions: rare).
+#[inline(always)]
+fn scaled<L: Lane>(sum: Vec3<L>, len2: L) -> (Vec3<L>, L, L) {
+    let floor = L::splat(SUM_LEN2_MIN);
+    if !(len2.lt(floor) & len2.gt(L::zero())).any() {
+        return (sum, len2, L::one());
+    }
+    let mut c = L::one();
+    for _ in 0..4 {
+        // `(len2 c) c`: `c c` overflows at the fourth step.
+        c = L::select((len2 * c * c).lt(floor), c * L::splat(1048576.0), c);
+    }
+    let sum = sum * c;
+    (sum, sum.length_squared(), c)
 }
 
 /// Burley's `FH = (1 - l.h)^5` of a reflection pair ([`HalfVector::fh`]; 0 when

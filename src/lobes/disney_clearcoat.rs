@@ -117,18 +117,24 @@ impl Model for DisneyClearcoat {
         // No early exit for a register below the surface: a branch here would keep a
         // fused kernel from sharing the half vector with the other lobes.
         let half = HalfVector::of(wo, wi);
-        let h = half.h;
+        let h = half.sum;
         let ok = both_above(wo, wi) & half.exists & h.z.gt(L::zero());
         // Dr = norm / e (`Gtr1::denominator`), Gr = 1 / (c_i c_o), and the pdf
-        // Dr cos_h / (4 v.h) with v.h = |wo + wi| / 2: one division. e >= a^2 >= 1e-6,
-        // c_i, c_o >= 0.25 and |wo + wi| >= 3.7e-23, so the product is a normal float.
+        // Dr cos_h / (4 v.h) with v.h = |wo + wi| / 2. `e` is homogeneous of degree 2:
+        // for the half vector's unnormalized `s` = c (wo + wi) (`HalfVector::scale`),
+        // e(h) = e(s) / |s|^2 and cos_h / v.h = 2 c s.z / |s|^2, so one division serves
+        // both: e(s) >= a^2 |s|^2 >= 1.5e-8 and c_i, c_o >= 0.25.
         let e = p.gtr1.denominator(h);
         let (c_i, c_o) = (smith_denominator(wi.z), smith_denominator(wo.z));
-        let inv = L::one() / L::select(ok, e * c_i * c_o * half.len, L::one());
+        let inv = L::one() / L::select(ok, e * c_i * c_o, L::one());
         let norm = p.gtr1.norm;
-        let pdf = L::select(ok, L::splat(0.5) * norm * h.z * c_i * c_o * inv, L::zero());
+        let pdf = L::select(
+            ok,
+            L::splat(0.5) * norm * h.z * half.scale * c_i * c_o * inv,
+            L::zero(),
+        );
         let fr = L::splat(0.96).mul_add(half.fh, L::splat(0.04));
-        let value = norm * fr * wi.z * half.len * inv;
+        let value = norm * fr * wi.z * half.sum_len2 * inv;
         let value = L::select(ok, value, L::zero());
         Eval {
             value: Rgb::new(value, value, value),

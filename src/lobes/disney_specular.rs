@@ -167,20 +167,26 @@ impl Model for DisneySpecular {
         let ok = both_above(wo, wi) & half.exists;
         // D = n / q^2 (`Ggx::q`); Gs = 1 / (a_i a_o); the VNDF pdf G1(wo) D / (4 cos_o)
         // (Heitz 2018 eq. 17) with G1(wo) / cos_o = 2 / b, b = cos_o + sigma(wo)
-        // (`SmithNdf::sigma`). One division serves them all: q^2 >= 1e-28, a_i, a_o >=
-        // 0.079 (the remapped alphas), b >= 0.001, so the product is a normal float.
+        // (`SmithNdf::sigma`). `q` is homogeneous of degree 2, so q(h) = q(s) / |s|^2
+        // for the half vector's unnormalized `s`, and one division serves them all:
+        // q(s)^2 >= 1e-24 |s|^4 with |s|^2 >= 2^-6 (`HalfVector::sum_len2`), a_i, a_o >=
+        // 0.079 (the remapped alphas) and b >= 0.001 make the product a normal float.
         let axy = p.dist.alpha_x * p.dist.alpha_y;
         let n = axy * axy * axy * L::splat(INV_PI);
-        let q = p.dist.q(half.h);
+        let q = p.dist.q(half.sum);
         let a_i = smith_denominator(wi, p.gx, p.gy);
         let a_o = smith_denominator(wo, p.gx, p.gy);
         let b = wo.z + p.dist.sigma(wo, wo.z);
-        let inv = L::one() / L::select(ok, q * q * a_i * a_o * b, L::one());
+        let len2 = half.sum_len2;
+        // 1 / (q(h)^2 a_i a_o b).
+        let inv = len2 * len2 / L::select(ok, q * q * a_i * a_o * b, L::one());
         let pdf = L::select(ok, L::splat(0.5) * n * a_i * a_o * inv, L::zero());
         let fh = half.fh;
         // Zero where not `ok`: the Schlick term is finite (fh and f0 in [0, 1]), so the
-        // value is the +0 a select of each channel would give.
-        let scale = L::select(ok, n * wi.z * b * inv, L::zero());
+        // value is the +0 a select of each channel would give. `wi.z` last: `n` is as
+        // small as 3e-19, and `n wi.z` leaves the normal floats at grazing `wi` where
+        // the value does not.
+        let scale = L::select(ok, n * b * inv * wi.z, L::zero());
         let value = p.f0.map(
             #[inline(always)]
             |f0| (L::one() - f0).mul_add(fh, f0) * scale,

@@ -158,6 +158,30 @@ impl Rng {
     }
 }
 
+/// `n` pairs `(wo, wi)` of unit directions above the surface, nearly opposite and
+/// grazing: `wo = (x, y, z)` at height `z` from 1e-4 down to 1e-22 (log-uniform, so
+/// `|wo + wi|^2` reaches the subnormals), `|y| <= z` and `x` (1 in f32) its unit
+/// length; `wi = (-x, dy - y, t z)` with `|dy| <= 2 z`, `t` in [0.05, 1]: `wo + wi =
+/// (0, dy, (1 + t) z)` up to an ulp of each component, a half vector from the normal
+/// to 62 degrees. Half the pairs swap `x` and `y`. Both are unit to f32 precision.
+pub fn opposite_grazing_pairs(rng: &mut Rng, n: usize) -> Vec<(Vec3<f32>, Vec3<f32>)> {
+    (0..n)
+        .map(|_| {
+            let z = 10f64.powf(-4.0 - 18.0 * rng.f64());
+            let (y, dy) = (z * (2.0 * rng.f64() - 1.0), z * (4.0 * rng.f64() - 2.0));
+            let x = (1.0 - y * y - z * z).sqrt();
+            let t = 0.05 + 0.95 * rng.f64();
+            let (wo, wi) = ([x, y, z], [-x, dy - y, t * z]);
+            let swap = rng.f64() < 0.5;
+            let v = |w: [f64; 3]| {
+                let (a, b) = if swap { (w[1], w[0]) } else { (w[0], w[1]) };
+                Vec3::new(a as f32, b as f32, w[2] as f32)
+            };
+            (v(wo), v(wi))
+        })
+        .collect()
+}
+
 /// `|actual - expected| <= rel |expected| + abs`.
 pub fn close(actual: f64, expected: f64, rel: f64, abs: f64) -> bool {
     (actual - expected).abs() <= rel * expected.abs() + abs
