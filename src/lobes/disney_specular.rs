@@ -21,7 +21,7 @@
 //! - `anisotropic` (float, [0, 1], default 0);
 //! - `f0` (rgb, [0, 1], default 0.04): the normal-incidence color (Disney's `Cspec0`).
 //!
-//! Sampling draws GGX visible normals of `(ax, ay)` (Heitz 2018), so the pdf is
+//! Sampling draws GGX visible normals of `(ax, ay)` (Dupuy and Benyoub 2023), so the pdf is
 //! `G1(wo) D / (4 cos_o)` with D's own Smith `G1`, while the value keeps the remapped
 //! masking: the weight is not `F G2 / G1` as for the conductor, but it is smooth and
 //! bounded. Roughness 0 is alpha 0.001, glossy (Burley's clamp), not a delta lobe.

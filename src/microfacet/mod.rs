@@ -5,7 +5,7 @@
 //! - [`SmithNdf`]: an anisotropic distribution with Smith masking, given by its
 //!   `Lambda`; the shared terms (G1, height-correlated G2 (Heitz 2014), the pair terms
 //!   of an eval, visible-normal densities) are provided methods written once here.
-//!   [`Ggx`] (Heitz 2018 sampling) and [`Beckmann`] (Heitz and d'Eon 2014) implement it.
+//!   [`Ggx`] (Dupuy and Benyoub 2023 sampling) and [`Beckmann`] (Heitz and d'Eon 2014) implement it.
 //! - [`Distribution`]: a Smith distribution chosen at run time (the `distribution`
 //!   parameter of the microfacet lobes), dispatching to the list in [`smith_ndfs!`].
 //!
