@@ -26,11 +26,11 @@
 //!   opposite vectors, decides the microfacet's side by rounding: 1 of 1.8M samples,
 //!   at `cos_o` 1e-6, once the GGX sampler mapped its random numbers differently) or
 //!   comes from the far tail `u0 > EDGE_ON` (microfacets seen edge-on, at the visible
-//!   domain's boundary),
-//!   and on at most `INDEX_MATCHED_FLAGS` of an index-matched dielectric's samples: its
-//!   settled direction's validity hangs on a half vector that is a difference of nearly
-//!   opposite vectors, which rounding decides (1 of its samples when caller directions
-//!   within four ulps of unit length were first taken as they are).
+//!   domain's boundary), and on at most `INDEX_MATCHED_FLAGS` of an index-matched
+//!   dielectric's samples: its settled direction's validity hangs on a half vector
+//!   that is a difference of nearly opposite vectors, which rounding decides (1 of its
+//!   samples when caller directions within four ulps of unit length were first taken
+//!   as they are).
 
 mod common;
 mod reference;
@@ -506,7 +506,8 @@ fn samples_match_the_scalar_calls_within_their_conditioning() {
             // its microfacet the view, or the lobe is index-matched (counted).
             let w = if fb != 0 { wb } else { ws };
             let height = to_local(&case.frame, w.normalize()).z.abs();
-            let grazing_view = p.cos[i].0.abs() <= HORIZON;
+            let (cos_o, _) = p.cos[i];
+            let grazing_view = cos_o.abs() <= HORIZON;
             let boundary = height <= HORIZON || grazing_view || p.u[i][1] > EDGE_ON;
             let one_failed = fb == 0 || fs == 0;
             worst.index_matched_flags += usize::from(one_failed && !boundary && index_matched);
