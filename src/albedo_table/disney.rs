@@ -24,6 +24,7 @@
 
 use super::generate::{Warp, strata};
 use super::{corners, grid};
+use crate::math::lane::ROW;
 use crate::math::{Lane, Mask, Vec3};
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 use std::f64::consts::PI;
@@ -271,6 +272,13 @@ fn bilinear_one<T: Copy>(
         fm * fr,
     ];
     ([window[0], window[1], window[NM], window[NM + 1]], weights)
+}
+
+/// The [`ROW`] cells of a table from cell `at`: one row of its `cos_o` axis.
+#[inline(always)]
+fn row(values: &[f32], at: usize) -> &[f32; ROW] {
+    const { assert!(NM == ROW) };
+    values[at..at + ROW].try_into().expect("a row is ROW cells")
 }
 
 /// `sum_k weights[k] values[k]` summed in pairs: a closure's build waits on this chain
@@ -538,11 +546,19 @@ impl ClearcoatTable {
         let (ig, fg) = grid(gloss, NG);
         let c: [(L, L); 4] = corners(L::zero(), [(im, fm, 1), (ig, fg, NM)]);
         let values = Self::values();
+        // `clearcoat_gloss` is most often the material's own, one gloss row pair on
+        // every lane: the rows' cells are picked rather than gathered (the same ones).
+        let first = ig.lane0();
+        let one_row_pair = ig.eq(L::splat(first)).all();
         let mut sum = L::zero();
         // `corners`' first axis is `cos_o`'s, of stride 1: corners 2j and 2j + 1 are
         // adjacent cells, read together.
-        for corner in c.chunks_exact(2) {
-            let cells = L::gather_adjacent(values, corner[0].0);
+        for (j, corner) in c.chunks_exact(2).enumerate() {
+            let cells = if one_row_pair {
+                L::row_adjacent(row(values, (first as usize + j) * NM), im)
+            } else {
+                L::gather_adjacent(values, corner[0].0)
+            };
             for (v, &(_, w)) in cells.into_iter().zip(corner) {
                 sum = w.mul_add(v, sum);
             }

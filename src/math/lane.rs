@@ -11,6 +11,9 @@ use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub
 /// Most lanes of any lane type (two AVX-512 registers, `simd::pair::Pair`).
 pub const MAX_LANES: usize = 32;
 
+/// Cells of a row [`Lane::row_adjacent`] reads (an albedo table's `cos_o` axis).
+pub const ROW: usize = 64;
+
 /// A per-lane boolean.
 pub trait Mask: Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self> {
     fn splat(value: bool) -> Self;
@@ -120,6 +123,14 @@ pub trait Lane:
             Self::gather(table, index),
             Self::gather(table, index + Self::one()),
         ]
+    }
+    /// [`Lane::gather_adjacent`] within one row of [`ROW`] cells (`index` in
+    /// `0..ROW - 1`): the same values, which AVX-512 picks from four registers by
+    /// permutes instead of a gather (a table row shared by every lane, such as one
+    /// roughness's row of an albedo table).
+    #[inline(always)]
+    fn row_adjacent(row: &[f32; ROW], index: Self) -> [Self; 2] {
+        Self::gather_adjacent(row, index)
     }
     /// The lanes where `mask` is set, in lane order, moved to the front; the other
     /// lanes are unspecified.

@@ -3,6 +3,7 @@
 //! since the `_ps` logic ops need AVX-512DQ).
 
 use super::{compound_assign, elementary_functions_from_vmath, intrinsic, newton_rsqrt};
+use crate::math::lane::ROW;
 use crate::math::{Lane, Mask};
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
@@ -245,6 +246,23 @@ impl Lane for F32x16 {
         ]
     }
     #[inline(always)]
+    fn row_adjacent(row: &[f32; ROW], index: Self) -> [Self; 2] {
+        let first = index.table_index(ROW - 1);
+        let second = intrinsic!(_mm512_add_epi32(first, _mm512_set1_epi32(1)));
+        // No `map`: its closure would be a function without the kernel's target
+        // features (tests/simd_inlining.rs).
+        let quarters = [
+            Self::load(&row[..]).0,
+            Self::load(&row[16..]).0,
+            Self::load(&row[32..]).0,
+            Self::load(&row[48..]).0,
+        ];
+        [
+            F32x16(pick_cell(&quarters, first)),
+            F32x16(pick_cell(&quarters, second)),
+        ]
+    }
+    #[inline(always)]
     fn compress(self, mask: M16) -> Self {
         F32x16(intrinsic!(_mm512_maskz_compress_ps(mask.0, self.0)))
     }
@@ -265,6 +283,16 @@ impl Lane for F32x16 {
         let [first, second] = adjacent_cells(table.as_ptr(), table.len(), index);
         [split_codes(first), split_codes(second)]
     }
+}
+
+/// Cell `index` (in `0..ROW`) of a row held as four registers: each half of the row
+/// picked by one two-register permute, the half chosen by the index's bit 5.
+#[inline(always)]
+fn pick_cell(quarters: &[__m512; 4], index: __m512i) -> __m512 {
+    let low = intrinsic!(_mm512_permutex2var_ps(quarters[0], index, quarters[1]));
+    let high = intrinsic!(_mm512_permutex2var_ps(quarters[2], index, quarters[3]));
+    let upper = intrinsic!(_mm512_test_epi32_mask(index, _mm512_set1_epi32(32)));
+    intrinsic!(_mm512_mask_blend_ps(upper, low, high))
 }
 
 /// Each lane's 32-bit cells `index` and `index + 1` of a table of `len` cells at

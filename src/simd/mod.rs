@@ -312,6 +312,7 @@ fn map_math_lanes<L: Lane>(f: MathFn, x: &[f32], y: &[f32], out: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::lane::ROW;
 
     /// `gather_adjacent` and `gather_code_pairs_adjacent` of every lane index of `index`
     /// into `out`: per register, both cells of each (eight rows: the f32 pair, then the
@@ -376,6 +377,49 @@ mod tests {
             }
             let scalar: Vec<f32> = index.iter().map(|&i| values[i as usize + 1]).collect();
             assert_eq!(bits(&out[1]), bits(&scalar), "{:?}", kernels.isa());
+        }
+    }
+
+    /// `row_adjacent` and `gather_adjacent` of every lane index into `out` (rows 0-1 and
+    /// 2-3).
+    #[inline(always)]
+    fn row_lanes<L: Lane>(row: &[f32; ROW], index: &[f32], out: &mut [Vec<f32>; 4]) {
+        for i in (0..index.len()).step_by(L::LANES) {
+            let at = L::load(&index[i..]);
+            let [a, b] = L::row_adjacent(row, at);
+            let [c, d] = L::gather_adjacent(row, at);
+            for (r, v) in out.iter_mut().zip([a, b, c, d]) {
+                v.store(&mut r[i..]);
+            }
+        }
+    }
+
+    kernel!(row_pick<>(row: &[f32; ROW], index: &[f32], out: &mut [Vec<f32>; 4]) => row_lanes);
+
+    /// A row's cells picked by permutes are, on every ISA, the bits gathers read: every
+    /// index of the row, in an order that crosses the row's halves and quarters within
+    /// each register.
+    #[test]
+    fn row_picks_read_the_gathered_cells() {
+        let mut row: [f32; ROW] = std::array::from_fn(|i| (i as f32 * 0.61).cos() * 1e3);
+        row[5] = -0.0;
+        row[40] = f32::from_bits(0x7fc0_1234);
+        let mut index: Vec<f32> = (0..ROW - 1)
+            .map(|i| ((i * 37) % (ROW - 1)) as f32)
+            .collect();
+        index.push(0.0);
+        for kernels in Kernels::available() {
+            let mut out: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0; index.len()]);
+            row_pick(kernels, &row, &index, &mut out);
+            let bits = |r: &Vec<f32>| r.iter().map(|v| v.to_bits()).collect::<Vec<u32>>();
+            for k in 0..2 {
+                let want: Vec<u32> = index
+                    .iter()
+                    .map(|&i| row[i as usize + k].to_bits())
+                    .collect();
+                assert_eq!(bits(&out[k]), want, "{:?}, cell {k}", kernels.isa());
+                assert_eq!(bits(&out[k + 2]), want, "{:?}, cell {k}", kernels.isa());
+            }
         }
     }
 }

@@ -6,7 +6,7 @@
 //! arithmetic is the half's own, so the results are the bits of `L`.
 
 use super::compound_assign;
-use crate::math::lane::MAX_LANES;
+use crate::math::lane::{MAX_LANES, ROW};
 use crate::math::{Lane, Mask};
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
@@ -213,6 +213,12 @@ impl<L: Lane> Lane for Pair<L> {
     fn gather_adjacent(table: &[f32], index: Self) -> [Self; 2] {
         let [a0, b0] = L::gather_adjacent(table, index.0);
         let [a1, b1] = L::gather_adjacent(table, index.1);
+        [Pair(a0, a1), Pair(b0, b1)]
+    }
+    #[inline(always)]
+    fn row_adjacent(row: &[f32; ROW], index: Self) -> [Self; 2] {
+        let [a0, b0] = L::row_adjacent(row, index.0);
+        let [a1, b1] = L::row_adjacent(row, index.1);
         [Pair(a0, a1), Pair(b0, b1)]
     }
     /// Each half compressed by its own lanes, the second's written after the first's
