@@ -249,10 +249,13 @@ impl<L: Lane, const SKIP_DROPPED: bool> SlotVisitor for EvalSlots<'_, L, SKIP_DR
         }
         let p = M::prepare(Params::new(&self.decoded[k][..M::DECODED_LEN]));
         let e = M::eval(&p, self.wo, self.wi, Transport::Radiance);
-        let (v, q) = (self.weight[k] * e.value, probability * e.pdf);
+        let term = Term {
+            weight: self.weight[k],
+            probability,
+        };
         self.sum = Some(match self.sum {
-            None => (v, q),
-            Some((value, pdf)) => (value + v, pdf + q),
+            None => (term.weight * e.value, probability * e.pdf),
+            Some(sum) => fused::add_weighted(sum, &term, e),
         });
         Ok(())
     }

@@ -105,17 +105,20 @@ pub trait Shape: 'static {
     ) -> [Eval<L>; MAX_FUSED];
 }
 
-/// `weight f` and `p pdf` of one lobe, as the eval kernel computes them.
+/// `sum + (weight f, p pdf)` of one more lobe, each channel by one fused multiply-add:
+/// how every eval path sums its lobes (`kernels::put_product` in rows), so that a
+/// fused kernel and lobe-by-lobe rows hold the same bits.
 #[inline(always)]
-fn weighted<M: Model, L: Lane>(
-    p: &M::Prepared<L>,
-    term: &Term<L>,
-    wo: Vec3<L>,
-    wi: Vec3<L>,
-    mode: Transport,
-) -> (Rgb<L>, L) {
-    let e = M::eval(p, wo, wi, mode);
-    (term.weight * e.value, term.probability * e.pdf)
+pub fn add_weighted<L: Lane>((value, pdf): (Rgb<L>, L), term: &Term<L>, e: Eval<L>) -> (Rgb<L>, L) {
+    let w = term.weight;
+    (
+        Rgb::new(
+            w.r.mul_add(e.value.r, value.r),
+            w.g.mul_add(e.value.g, value.g),
+            w.b.mul_add(e.value.b, value.b),
+        ),
+        term.probability.mul_add(e.pdf, pdf),
+    )
 }
 
 /// The lobes' blocks and terms, the same for every lane.
@@ -166,13 +169,16 @@ macro_rules! shape {
                 mode: Transport,
             ) -> (Rgb<L>, L) {
                 let ($first, $($m,)*) = p;
-                let (mut value, mut pdf) = weighted::<$first, L>($first, &terms[0], wo, wi, mode);
+                let e = $first::eval($first, wo, wi, mode);
+                let (mut value, mut pdf) = (terms[0].weight * e.value, terms[0].probability * e.pdf);
                 let mut k = 0;
                 $(
                     k += 1;
-                    let (v, q) = weighted::<$m, L>($m, &terms[k], wo, wi, mode);
-                    value = value + v;
-                    pdf += q;
+                    (value, pdf) = add_weighted(
+                        (value, pdf),
+                        &terms[k],
+                        $m::eval($m, wo, wi, mode),
+                    );
                 )*
                 (value, pdf)
             }
@@ -338,12 +344,9 @@ fn sample_register<S: Shape, L: Lane>(
     let (mut value, mut pdf) = (Rgb::zero(), L::zero());
     for k in 0..S::LOBES {
         let mine = mine[k];
-        let (v, q) = (
-            terms[k].weight * evals[k].value,
-            terms[k].probability * evals[k].pdf,
-        );
-        value = value + Rgb::select(mine, own_value, v);
-        pdf += L::select(mine, own_pdf, q);
+        let (v, q) = add_weighted((value, pdf), &terms[k], evals[k]);
+        value = Rgb::select(mine, value + own_value, v);
+        pdf = L::select(mine, pdf + own_pdf, q);
     }
     RegisterSample {
         sample,

@@ -386,6 +386,30 @@ fn store_where<L: Lane>(only: Option<L::Mask>, v: L, row: &mut [f32], i: usize, 
     store(v, row, i, n);
 }
 
+/// `row[i..] = w f`, or `+= w f` by one fused multiply-add unless `overwrite` (as a
+/// fused kernel sums its lobes, `kernels::fused`); lanes of `excluded` get nothing.
+#[inline(always)]
+fn put_product<L: Lane>(
+    w: L,
+    f: L,
+    excluded: Option<L::Mask>,
+    row: &mut [f32],
+    (i, n): (usize, usize),
+    overwrite: bool,
+) {
+    let (v, kept) = if overwrite {
+        (w * f, L::zero())
+    } else {
+        let old = load::<L>(row, i, n, 0.0);
+        (w.mul_add(f, old), old)
+    };
+    let v = match excluded {
+        Some(mask) => L::select(mask, kept, v),
+        None => v,
+    };
+    store(v, row, i, n);
+}
+
 /// `row[i..] = v`, or `+= v` unless `overwrite`.
 #[inline(always)]
 fn put<L: Lane>(v: L, row: &mut [f32], i: usize, n: usize, overwrite: bool) {
@@ -555,17 +579,21 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for EvalJob<'_> {
             (lanes.frame.to_local(wo), lanes.frame.to_local(wi))
         };
         let e = M::eval(p, wo, wi, self.mode);
-        let (mut value, mut pdf) = (lanes.weight * e.value, lanes.probability * e.pdf);
-        if let Some(excluded) = chosen_mask::<L>(self.except, i, n) {
-            value = Rgb::select(excluded, Rgb::zero(), value);
-            pdf = L::select(excluded, L::zero(), pdf);
-        }
+        let excluded = chosen_mask::<L>(self.except, i, n);
         if let Some(rows) = &mut self.value {
-            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
-                put(v, row, i, n, self.store);
+            let terms = lanes.weight.to_array().into_iter().zip(e.value.to_array());
+            for ((w, f), row) in terms.zip(rows.iter_mut()) {
+                put_product(w, f, excluded, row, (i, n), self.store);
             }
         }
-        put(pdf, self.pdf, i, n, self.store);
+        put_product(
+            lanes.probability,
+            e.pdf,
+            excluded,
+            self.pdf,
+            (i, n),
+            self.store,
+        );
     }
 }
 
