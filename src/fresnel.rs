@@ -12,7 +12,18 @@ pub fn schlick<L: Lane>(f0: L, f90: L, cos_theta: L) -> L {
 /// Schlick's weight `clamp(1 - cos, 0, 1)^5` (Burley 2012's `SchlickWeight`).
 #[inline(always)]
 pub fn schlick_weight<L: Lane>(cos_theta: L) -> L {
-    let m = (L::one() - cos_theta).clamp(L::zero(), L::one());
+    fifth_power((L::one() - cos_theta).clamp(L::zero(), L::one()))
+}
+
+/// [`schlick_weight`] without the clamp, for a cosine in [0, 1] (where the clamp
+/// changes nothing) or on lanes the caller selects away.
+#[inline(always)]
+pub fn schlick_weight_in_range<L: Lane>(cos_theta: L) -> L {
+    fifth_power(L::one() - cos_theta)
+}
+
+#[inline(always)]
+fn fifth_power<L: Lane>(m: L) -> L {
     let m2 = m * m;
     m2 * m2 * m
 }
@@ -51,15 +62,14 @@ impl<L: Lane> HalfVector<L> {
     pub fn of(wo: Vec3<L>, wi: Vec3<L>) -> Self {
         let sum = wo + wi;
         let len2 = sum.length_squared();
-        let m = ((wo - wi).length_squared() * L::splat(0.5) / (L::splat(2.0) + len2.sqrt()))
-            .min(L::one());
-        let m2 = m * m;
+        let d = wo - wi;
+        let m = (d.dot_fused(d) * L::splat(0.5) / (L::splat(2.0) + len2.sqrt())).min(L::one());
         let (sum, sum_len2, scale) = scaled(sum, len2);
         HalfVector {
             sum,
             sum_len2,
             scale,
-            fh: m2 * m2 * m,
+            fh: fifth_power(m),
             exists: len2.gt(L::zero()),
         }
     }

@@ -273,7 +273,8 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
         if out_of_range {
             return false;
         }
-        let sums = S::sum(&p, &terms, frame.to_local(wo), frame.to_local(wi), job.mode);
+        let (wo, wi) = frame.to_local_pair(wo, wi);
+        let sums = S::sum(&p, &terms, wo, wi, job.mode);
         store_sums(sums, &mut value, job.pdf, i, n);
     }
     true

@@ -576,7 +576,7 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for EvalJob<'_> {
         let (wo, wi) = if self.directions == Directions::Local {
             (wo, wi)
         } else {
-            (lanes.frame.to_local(wo), lanes.frame.to_local(wi))
+            lanes.frame.to_local_pair(wo, wi)
         };
         let e = M::eval(p, wo, wi, self.mode);
         let excluded = chosen_mask::<L>(self.except, i, n);

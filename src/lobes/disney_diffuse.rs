@@ -41,7 +41,7 @@ use super::lambert::cosine_hemisphere;
 use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
-use crate::fresnel::schlick_weight;
+use crate::fresnel::{schlick_weight, schlick_weight_in_range};
 use crate::math::vmath::estrin9;
 use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3};
 use crate::params::{ParamSpec, offset_of};
@@ -73,8 +73,16 @@ fn fresnel_pair<L: Lane>(f90_minus_1: L, (fl, fv): (L, L)) -> L {
 fn shape<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>) -> L {
     let ok = both_above(wo, wi);
     let (cos_o, cos_i) = (wo.z.min(L::one()), wi.z.min(L::one()));
-    let cos2_d = ((L::one() + wo.dot(wi)) * L::splat(0.5)).clamp(L::zero(), L::one());
-    let weights = (schlick_weight(cos_i), schlick_weight(cos_o));
+    // `(1 + l.v) / 2` as one multiply-add: the same rounding (halving is exact).
+    let cos2_d = wo
+        .dot_fused(wi)
+        .mul_add(L::splat(0.5), L::splat(0.5))
+        .clamp(L::zero(), L::one());
+    // The cosines are in (0, 1] wherever the shape is kept (`ok`).
+    let weights = (
+        schlick_weight_in_range(cos_i),
+        schlick_weight_in_range(cos_o),
+    );
     let fd = fresnel_pair(
         (L::splat(2.0) * p.roughness).mul_add(cos2_d, L::splat(-0.5)),
         weights,

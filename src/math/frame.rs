@@ -161,6 +161,19 @@ impl<L: Lane> LaneFrame<L> {
         }
         Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
     }
+    /// [`Self::to_local`] of two directions, the same results as two calls: one check
+    /// for both where the frame is the identity (a product of all six components in
+    /// `(0, inf)` has each direction's three there too).
+    #[inline(always)]
+    pub fn to_local_pair(&self, a: Vec3<L>, b: Vec3<L>) -> (Vec3<L>, Vec3<L>) {
+        if self.identity {
+            let p = (a.x * a.y * a.z * (b.x * b.y * b.z)).abs();
+            if (p.gt(L::zero()) & p.lt(L::splat(f32::INFINITY))).all() {
+                return (a, b);
+            }
+        }
+        (self.to_local(a), self.to_local(b))
+    }
     #[inline(always)]
     pub fn to_world(&self, v: Vec3<L>) -> Vec3<L> {
         if self.passes(v) {
@@ -211,30 +224,51 @@ mod tests {
     use super::*;
     use crate::simd::{Kernels, kernel};
 
-    /// `to_local` and `to_world` of a splatted frame, each row of `v` one component.
+    /// `to_local` and `to_world` of a splatted frame, and `to_local_pair` of `v` and `w`
+    /// (each row one component).
     #[inline(always)]
-    fn rotate_lanes<L: Lane>(frame: &Frame, v: &[Vec<f32>; 3], out: &mut [Vec<f32>; 6]) {
+    fn rotate_lanes<L: Lane>(
+        frame: &Frame,
+        (v, w): (&[Vec<f32>; 3], &[Vec<f32>; 3]),
+        out: &mut [Vec<f32>; 12],
+    ) {
         let axes = LaneFrame::<L>::splat(frame);
         for i in (0..v[0].len()).step_by(L::LANES) {
-            let d = Vec3::new(
-                L::load(&v[0][i..]),
-                L::load(&v[1][i..]),
-                L::load(&v[2][i..]),
-            );
+            let (d, e) = (at::<L>(v, i), at::<L>(w, i));
             let (local, world) = (axes.to_local(d), axes.to_world(d));
-            let rows = [local.x, local.y, local.z, world.x, world.y, world.z];
+            let (pair_d, pair_e) = axes.to_local_pair(d, e);
+            let rows = [
+                local.x, local.y, local.z, world.x, world.y, world.z, pair_d.x, pair_d.y, pair_d.z,
+                pair_e.x, pair_e.y, pair_e.z,
+            ];
             for (row, r) in out.iter_mut().zip(rows) {
                 r.store(&mut row[i..]);
             }
         }
     }
 
-    kernel!(rotate<>(frame: &Frame, v: &[Vec<f32>; 3], out: &mut [Vec<f32>; 6]) => rotate_lanes);
+    /// Lanes `i..` of three rows. (A function: a closure would lose the kernel's target
+    /// features.)
+    #[inline(always)]
+    fn at<L: Lane>(rows: &[Vec<f32>; 3], i: usize) -> Vec3<L> {
+        Vec3::new(
+            L::load(&rows[0][i..]),
+            L::load(&rows[1][i..]),
+            L::load(&rows[2][i..]),
+        )
+    }
+
+    kernel!(rotate<>(
+        frame: &Frame,
+        rows: (&[Vec<f32>; 3], &[Vec<f32>; 3]),
+        out: &mut [Vec<f32>; 12]
+    ) => rotate_lanes);
 
     /// The identity frame's pass-through gives, on every ISA, the bits of the scalar
     /// frame's products, for the identity and a frame equal to it with -0 zeros: zeros
     /// of either sign beside components of either sign, components whose product
-    /// underflows, infinities and NaN (NaN for NaN).
+    /// underflows, infinities and NaN (NaN for NaN); `to_local_pair` those of two
+    /// `to_local` calls, with each direction beside the others in turn.
     #[test]
     fn the_identity_passes_directions_through_with_the_products_bits() {
         let values = [
@@ -268,6 +302,12 @@ mod tests {
             }
         }
         let n = v[0].len();
+        // The second direction of each pair: the same values a third of the way on.
+        let w: [Vec<f32>; 3] = std::array::from_fn(|c| {
+            let mut row = v[c].clone();
+            row.rotate_left(n / 3);
+            row
+        });
         // The identity, and a frame equal to it as floats with every zero -0.
         let signed = Frame {
             t: Vec3::new(1.0, -0.0, -0.0),
@@ -275,20 +315,23 @@ mod tests {
             n: Vec3::new(-0.0, -0.0, 1.0),
         };
         for frame in [Frame::IDENTITY, signed] {
-            let mut expected: [Vec<u32>; 6] = Default::default();
-            for ((&x, &y), &z) in v[0].iter().zip(&v[1]).zip(&v[2]) {
-                let d = Vec3::new(x, y, z);
-                let (local, world) = (frame.to_local(d), frame.to_world(d));
-                for (row, c) in expected
-                    .iter_mut()
-                    .zip([local.x, local.y, local.z, world.x, world.y, world.z])
-                {
+            let mut expected: [Vec<u32>; 12] = Default::default();
+            for i in 0..n {
+                let d = Vec3::new(v[0][i], v[1][i], v[2][i]);
+                let e = Vec3::new(w[0][i], w[1][i], w[2][i]);
+                let (local, world, local_e) =
+                    (frame.to_local(d), frame.to_world(d), frame.to_local(e));
+                let values = [
+                    local.x, local.y, local.z, world.x, world.y, world.z, local.x, local.y,
+                    local.z, local_e.x, local_e.y, local_e.z,
+                ];
+                for (row, c) in expected.iter_mut().zip(values) {
                     row.push(c.to_bits());
                 }
             }
             for kernels in Kernels::available() {
-                let mut out: [Vec<f32>; 6] = std::array::from_fn(|_| vec![0.0; n]);
-                rotate(kernels, &frame, &v, &mut out);
+                let mut out: [Vec<f32>; 12] = std::array::from_fn(|_| vec![0.0; n]);
+                rotate(kernels, &frame, (&v, &w), &mut out);
                 for (k, (got, want)) in out.iter().zip(&expected).enumerate() {
                     for i in 0..n {
                         // A NaN's sign and payload depend on the operands' order.
@@ -299,11 +342,14 @@ mod tests {
                         };
                         assert!(
                             same,
-                            "{:?}, {frame:?}, output {k}, input ({}, {}, {})",
+                            "{:?}, {frame:?}, output {k}, inputs ({}, {}, {}), ({}, {}, {})",
                             kernels.isa(),
                             v[0][i],
                             v[1][i],
-                            v[2][i]
+                            v[2][i],
+                            w[0][i],
+                            w[1][i],
+                            w[2][i]
                         );
                     }
                 }

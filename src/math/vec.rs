@@ -55,6 +55,13 @@ impl<L: Lane> Vec3<L> {
     pub fn dot(self, o: Self) -> L {
         self.x * o.x + (self.y * o.y + self.z * o.z)
     }
+    /// [`Self::dot`] by multiply-adds (one rounding fewer per term, and fewer
+    /// instructions), for the uses whose rounding nothing amplifies: sums of squares,
+    /// and cosines a lobe only scales by (never a half vector's or a direction's).
+    #[inline(always)]
+    pub fn dot_fused(self, o: Self) -> L {
+        self.x.mul_add(o.x, self.y.mul_add(o.y, self.z * o.z))
+    }
     #[inline(always)]
     pub fn cross(self, o: Self) -> Self {
         Self::new(

@@ -13,10 +13,13 @@ pub struct Ggx<L> {
 }
 
 impl<L: Lane> Ggx<L> {
-    /// `p^2 = (alpha_x w.x)^2 + (alpha_y w.y)^2`.
+    /// `p^2 = (alpha_x w.x)^2 + (alpha_y w.y)^2`. This sum of squares and the others
+    /// below are multiply-adds: their terms are positive, so nothing amplifies an
+    /// ulp of rounding (unlike `Vec3::dot`'s differences).
     #[inline(always)]
     fn projected2(&self, w: Vec3<L>) -> L {
-        (self.alpha_x * w.x).sqr() + (self.alpha_y * w.y).sqr()
+        let (x, y) = (self.alpha_x * w.x, self.alpha_y * w.y);
+        x.mul_add(x, y * y)
     }
 
     /// `q = t (ax ay)^2 = (h.x ay)^2 + (h.y ax)^2 + (h.z ax ay)^2`, so that
@@ -26,7 +29,8 @@ impl<L: Lane> Ggx<L> {
     #[inline(always)]
     pub fn q(&self, h: Vec3<L>) -> L {
         let (ax, ay) = (self.alpha_x, self.alpha_y);
-        (h.x * ay).sqr() + (h.y * ax).sqr() + (h.z * (ax * ay)).sqr()
+        let (x, y, z) = (h.x * ay, h.y * ax, h.z * (ax * ay));
+        x.mul_add(x, y.mul_add(y, z * z))
     }
 }
 
@@ -36,7 +40,7 @@ impl<L: Lane> Ndf<L> for Ggx<L> {
         let (ax, ay) = (self.alpha_x, self.alpha_y);
         let sx = m.x / ax;
         let sy = m.y / ay;
-        let t = sx * sx + sy * sy + m.z * m.z;
+        let t = sx.mul_add(sx, sy.mul_add(sy, m.z * m.z));
         let value = L::one().safe_div(L::splat(PI) * ax * ay * t * t);
         L::select(m.z.gt(L::zero()), value, L::zero())
     }
@@ -85,14 +89,14 @@ impl<L: Lane> SmithNdf<L> for Ggx<L> {
     fn lambda_cos(&self, w: Vec3<L>) -> L {
         let proj2 = self.projected2(w);
         let z = w.z.abs();
-        proj2.safe_div(L::splat(2.0) * ((z * z + proj2).sqrt() + z))
+        proj2.safe_div(L::splat(2.0) * (z.mul_add(z, proj2).sqrt() + z))
     }
 
     /// `2 Lambda |z| = sqrt(z^2 + p^2) - |z|`, so `sigma = sqrt(z^2 + p^2)`: one sqrt, no
     /// division. For a unit `w`, `sigma >= min(1, alpha_x, alpha_y) >= MIN_ALPHA`.
     #[inline(always)]
     fn sigma(&self, w: Vec3<L>, z: L) -> L {
-        (z * z + self.projected2(w)).sqrt()
+        z.mul_add(z, self.projected2(w)).sqrt()
     }
 
     /// `D = (ax ay)^3 / (pi q^2)` ([`Ggx::q`]), so `P = 2 (ax ay)^3 / (pi q^2 B)`: one
