@@ -254,7 +254,7 @@ impl<L: Lane, const SKIP_DROPPED: bool> SlotVisitor for EvalSlots<'_, L, SKIP_DR
             probability,
         };
         self.sum = Some(match self.sum {
-            None => (term.weight * e.value, probability * e.pdf),
+            None => fused::weighted(&term, e),
             Some(sum) => fused::add_weighted(sum, &term, e),
         });
         Ok(())

@@ -105,6 +105,12 @@ pub trait Shape: 'static {
     ) -> [Eval<L>; MAX_FUSED];
 }
 
+/// `(weight f, p pdf)` of a sum's first lobe.
+#[inline(always)]
+pub fn weighted<L: Lane>(term: &Term<L>, e: Eval<L>) -> (Rgb<L>, L) {
+    (term.weight * e.value, term.probability * e.pdf)
+}
+
 /// `sum + (weight f, p pdf)` of one more lobe, each channel by one fused multiply-add:
 /// how every eval path sums its lobes (`kernels::put_product` in rows), so that a
 /// fused kernel and lobe-by-lobe rows hold the same bits.
@@ -169,8 +175,7 @@ macro_rules! shape {
                 mode: Transport,
             ) -> (Rgb<L>, L) {
                 let ($first, $($m,)*) = p;
-                let e = $first::eval($first, wo, wi, mode);
-                let (mut value, mut pdf) = (terms[0].weight * e.value, terms[0].probability * e.pdf);
+                let (mut value, mut pdf) = weighted(&terms[0], $first::eval($first, wo, wi, mode));
                 let mut k = 0;
                 $(
                     k += 1;

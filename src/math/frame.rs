@@ -151,8 +151,7 @@ impl<L: Lane> LaneFrame<L> {
         if !self.identity {
             return false;
         }
-        let p = (v.x * v.y * v.z).abs();
-        (p.gt(L::zero()) & p.lt(L::splat(f32::INFINITY))).all()
+        nonzero_finite(v.x * v.y * v.z)
     }
     #[inline(always)]
     pub fn to_local(&self, v: Vec3<L>) -> Vec3<L> {
@@ -166,11 +165,8 @@ impl<L: Lane> LaneFrame<L> {
     /// `(0, inf)` has each direction's three there too).
     #[inline(always)]
     pub fn to_local_pair(&self, a: Vec3<L>, b: Vec3<L>) -> (Vec3<L>, Vec3<L>) {
-        if self.identity {
-            let p = (a.x * a.y * a.z * (b.x * b.y * b.z)).abs();
-            if (p.gt(L::zero()) & p.lt(L::splat(f32::INFINITY))).all() {
-                return (a, b);
-            }
+        if self.identity && nonzero_finite(a.x * a.y * a.z * (b.x * b.y * b.z)) {
+            return (a, b);
         }
         (self.to_local(a), self.to_local(b))
     }
@@ -181,6 +177,14 @@ impl<L: Lane> LaneFrame<L> {
         }
         self.t * v.x + self.b * v.y + self.n * v.z
     }
+}
+
+/// Whether every lane of the product `p` is in `(0, inf)` in magnitude
+/// ([`LaneFrame::passes`]' test).
+#[inline(always)]
+fn nonzero_finite<L: Lane>(p: L) -> bool {
+    let p = p.abs();
+    (p.gt(L::zero()) & p.lt(L::splat(f32::INFINITY))).all()
 }
 
 /// A 3-vector in f64 for [`Frame::new`]'s Gram-Schmidt.
