@@ -19,7 +19,7 @@ mod stage;
 use crate::closure::{Closure, MAX_LOBES, SampleResult};
 use crate::error::{Error, Status};
 use crate::kernels::{
-    AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, fused,
+    AlbedoJob, ClosureRows, Directions, EvalJob, LANE_MULTIPLE, LobeLanes, SampleJob, delay, fused,
     fused::{FusedEvalJob, FusedSampleJob},
     mixture,
 };
@@ -496,6 +496,7 @@ fn fused_eval(
     }
     let fused = fused::for_closure(closure)?;
     let local = lanes.start - base..lanes.end - base;
+    let mut ring: delay::EvalRing;
     let mut job = FusedEvalJob {
         mode: closure.transport(),
         frame,
@@ -504,7 +505,13 @@ fn fused_eval(
         lobes: fused.lobes,
         value: out.value.as_mut().map(|v| rows_mut(v, &local)),
         pdf: &mut out.pdf[local],
+        held: None,
     };
+    if delay::holds_back(wo.x.len(), lanes.len()) {
+        ring = [[0.0; delay::DELAY]; 4];
+        job.held = Some(&mut ring);
+        return Some((fused.eval_held)(kernels, &mut job));
+    }
     Some((fused.eval)(kernels, &mut job))
 }
 

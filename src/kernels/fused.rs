@@ -10,6 +10,7 @@
 //! ([`sample_register`]). The arithmetic is the unfused path's, operation for
 //! operation, so the outputs are the same bits.
 
+use super::delay::{self, DELAY, EvalRing};
 use super::mixture::{self, clamp_random};
 use super::{
     Directions, FinishOutput, MAX_LOBE_PARAMS, direction, load, load_frame, pack_events, rgb_at,
@@ -48,6 +49,8 @@ pub struct FusedEvalJob<'a> {
     /// `sum weight_k f_k cos` (when wanted) and `sum p_k pdf_k`, one per lane.
     pub value: Option<[&'a mut [f32]; 3]>,
     pub pdf: &'a mut [f32],
+    /// A ring to hold the outputs back in ([`delay`]), for calls that stream.
+    pub held: Option<&'a mut EvalRing>,
 }
 
 /// A lobe's weight and selection probability over lanes.
@@ -256,6 +259,23 @@ fn store_sums<L: Lane>(
 /// Rapids Xeon (full Disney closure, AVX-512: 266 against 287 M lanes/s; AVX2 211, 209).
 #[inline(always)]
 fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
+    eval_lanes::<S, L>(job, None)
+}
+
+/// [`eval_body`] with the outputs held back in the job's ring ([`delay`]): a kernel
+/// of its own, so that the other's loop keeps its code.
+#[inline(always)]
+fn eval_held_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
+    let ring = job.held.take();
+    eval_lanes::<S, L>(job, ring)
+}
+
+/// [`eval_body`] with its outputs held back in `ring` (when given, see [`delay`]).
+#[inline(always)]
+fn eval_lanes<S: Shape, L: Lane>(
+    job: &mut FusedEvalJob<'_>,
+    mut ring: Option<&mut EvalRing>,
+) -> bool {
     let len = job.pdf.len();
     let (params, terms) = uniform::<L>(&job.lobes);
     let p = S::prepare::<L>(&params);
@@ -280,9 +300,42 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
         }
         let (wo, wi) = frame.to_local_pair(wo, wi);
         let sums = S::sum(&p, &terms, wo, wi, job.mode);
-        store_sums(sums, &mut value, job.pdf, i, n);
+        match ring.as_deref_mut() {
+            Some(ring) => {
+                if i >= DELAY {
+                    release_sums::<L>(ring, &mut value, job.pdf, i - DELAY, L::LANES);
+                }
+                let [r, g, b, pdf] = ring;
+                let mut rgb = Some([&mut r[..], &mut g[..], &mut b[..]]);
+                store_sums(sums, &mut rgb, pdf, i % DELAY, n);
+            }
+            None => store_sums(sums, &mut value, job.pdf, i, n),
+        }
+    }
+    if let Some(ring) = ring {
+        for k in delay::held(len, L::LANES) {
+            release_sums::<L>(ring, &mut value, job.pdf, k, L::LANES.min(len - k));
+        }
     }
     true
+}
+
+/// The ring's sums of lanes `at..at + n` to the caller's rows ([`delay`]).
+#[inline(always)]
+fn release_sums<L: Lane>(
+    ring: &EvalRing,
+    value: &mut Option<[&mut [f32]; 3]>,
+    pdf: &mut [f32],
+    at: usize,
+    n: usize,
+) {
+    let slot = at % DELAY;
+    if let Some(rows) = value {
+        for (from, to) in ring.iter().zip(rows.iter_mut()) {
+            delay::release::<L>(from, to, slot, at, n);
+        }
+    }
+    delay::release::<L>(&ring[3], pdf, slot, at, n);
 }
 
 /// A closure's lobe indices as [`Shape::sample`]'s labels.
@@ -565,6 +618,10 @@ kernel!(
     eval<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_body
 );
 kernel!(
+    /// [`eval`] with its outputs held back in the job's ring (`eval_held_body`).
+    eval_held<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_held_body
+);
+kernel!(
     /// A fused shape's mixture sample over a job's lanes (`sample_body`); false when
     /// some `wo` is outside [`Directions::Raw`]'s range or some random number is not
     /// finite (outputs incomplete).
@@ -591,34 +648,39 @@ type NoClearcoat = (Diffuse, Sheen, Specular);
 type NoSheen = (Diffuse, Specular, Clearcoat);
 type Plastic = (Diffuse, Specular);
 type Metal = (Specular, Clearcoat);
-const SHAPES: [(Matches, FusedEval, FusedSample, FusedRowsSample); 5] = [
+const SHAPES: [(Matches, FusedEval, FusedEval, FusedSample, FusedRowsSample); 5] = [
     (
         Every::matches,
         eval::<Every>,
+        eval_held::<Every>,
         sample::<Every>,
         rows::<Every>,
     ),
     (
         NoClearcoat::matches,
         eval::<NoClearcoat>,
+        eval_held::<NoClearcoat>,
         sample::<NoClearcoat>,
         rows::<NoClearcoat>,
     ),
     (
         NoSheen::matches,
         eval::<NoSheen>,
+        eval_held::<NoSheen>,
         sample::<NoSheen>,
         rows::<NoSheen>,
     ),
     (
         Plastic::matches,
         eval::<Plastic>,
+        eval_held::<Plastic>,
         sample::<Plastic>,
         rows::<Plastic>,
     ),
     (
         Metal::matches,
         eval::<Metal>,
+        eval_held::<Metal>,
         sample::<Metal>,
         rows::<Metal>,
     ),
@@ -637,6 +699,8 @@ pub fn for_rows(models: &[Option<TypeId>]) -> Option<FusedRowsSample> {
 /// The fused kernels of a closure's shape, and its lobes as their jobs take them.
 pub struct Fused<'a> {
     pub eval: FusedEval,
+    /// `eval` for a job with a ring ([`FusedEvalJob::held`]).
+    pub eval_held: FusedEval,
     pub sample: FusedSample,
     pub lobes: [FusedLobe<'a>; MAX_FUSED],
 }
@@ -652,7 +716,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
         *m = l.lobe.model();
     }
     let models = &models[..lobes.len()];
-    let &(_, eval, sample, _) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
+    let &(_, eval, eval_held, sample, _) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
     let mut out = [FusedLobe {
         params: &[],
         weight: Rgb::new(0.0, 0.0, 0.0),
@@ -668,6 +732,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
     }
     Some(Fused {
         eval,
+        eval_held,
         sample,
         lobes: out,
     })

@@ -11,6 +11,7 @@
 //! job when every lane shares the closure, once per register otherwise. The closure
 //! mixture over lanes (lobe choice, the sample's weight and flags) is in [`mixture`].
 
+pub mod delay;
 pub mod expand;
 pub mod fused;
 pub mod material_rows;
