@@ -7,7 +7,8 @@ mod common;
 
 use common::{Block, Outputs, Rng, lobe, soa, soa_mut};
 use glint::batch::{
-    self, BLOCK, BatchInput, ClosureSource, EvalOutput, Exec, SampleOutput, SampleRandoms, Threads,
+    self, BLOCK, BatchInput, ClosureSource, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3,
+    Soa3Mut, Threads,
 };
 use glint::kernels::delay::{DELAY, STREAMING_LANES};
 use glint::lobes::Transport;
@@ -697,4 +698,155 @@ fn samples_carry_the_eval_at_their_direction_on_every_isa() {
         worst_mixture < 5e-7,
         "mixture sample vs eval: {worst_mixture:e}"
     );
+}
+
+/// `c`'s eval and sample over `input` rows (`wo`, `wi`, `u`) in calls of `call`
+/// lanes: into `out`, the eval's `value` and `pdf`, then the sample's `wi`, `pdf`,
+/// `weight`, `value`, `eta` and `roughness`, and `ints`, its flags and lobes.
+fn eval_and_sample(
+    exec: &Exec<'_>,
+    c: &Closure,
+    input: &[&[f32]],
+    out: &mut [&mut [f32]],
+    ints: &mut [Vec<u32>; 2],
+    call: usize,
+) {
+    let n = input[0].len();
+    let [flags, lobes] = ints;
+    for lo in (0..n).step_by(call) {
+        let r = lo..(lo + call).min(n);
+        let rows: Vec<&[f32]> = input.iter().map(|row| &row[r.clone()]).collect();
+        let three = |k: usize| Soa3 {
+            x: rows[k],
+            y: rows[k + 1],
+            z: rows[k + 2],
+        };
+        let batch = BatchInput {
+            count: r.len(),
+            closures: c,
+            active: None,
+            wo: three(0),
+        };
+        let o: Vec<&mut [f32]> = out.iter_mut().map(|row| &mut row[r.clone()]).collect();
+        let Ok(
+            [
+                v0,
+                v1,
+                v2,
+                pdf,
+                w0,
+                w1,
+                w2,
+                s_pdf,
+                g0,
+                g1,
+                g2,
+                s0,
+                s1,
+                s2,
+                eta,
+                rough,
+            ],
+        ) = <[&mut [f32]; 16]>::try_from(o)
+        else {
+            unreachable!("16 output rows")
+        };
+        let value = Soa3Mut {
+            x: v0,
+            y: v1,
+            z: v2,
+        };
+        let eval_out = EvalOutput {
+            value,
+            pdf,
+            pdf_reverse: None,
+        };
+        batch::eval(exec, &batch, three(3), eval_out).expect("eval");
+        let u = SampleRandoms {
+            u_lobe: rows[6],
+            u0: rows[7],
+            u1: rows[8],
+        };
+        let sample_out = SampleOutput {
+            wi: Soa3Mut {
+                x: w0,
+                y: w1,
+                z: w2,
+            },
+            pdf: s_pdf,
+            weight: Soa3Mut {
+                x: g0,
+                y: g1,
+                z: g2,
+            },
+            value: Some(Soa3Mut {
+                x: s0,
+                y: s1,
+                z: s2,
+            }),
+            flags: Some(&mut flags[r.clone()]),
+            lobe: Some(&mut lobes[r.clone()]),
+            component: None,
+            eta: Some(eta),
+            roughness: Some(rough),
+        };
+        batch::sample(exec, &batch, u, sample_out).expect("sample");
+    }
+}
+
+/// A call of STREAMING_LANES or more whose rows collide in the L2 cache's sets (the
+/// rows of one allocation, 16 bytes apart in its 128 KB cycle) holds its outputs back
+/// in a ring (kernels::delay): the same bits as calls too small to stream over rows
+/// of their own. A last block past the ring's length ends in a partial register.
+#[test]
+fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
+    let mut rng = Rng::new(34);
+    let all = closures(&mut rng);
+    let n = STREAMING_LANES + DELAY + 37;
+    let l = lanes(n, 1, &mut rng);
+    // One allocation, a row every 128 KB and 16 bytes.
+    let stride = n.next_multiple_of(32 << 10) + 4;
+    for c in &all {
+        for kernels in Kernels::available() {
+            let exec = Exec {
+                kernels,
+                threads: Threads::Caller,
+            };
+            let mut arena = vec![0.0f32; 25 * stride];
+            let (inputs, outputs) = arena.split_at_mut(9 * stride);
+            let rows: Vec<&[f32]> = inputs
+                .chunks_exact_mut(stride)
+                .zip(l.wo.iter().chain(&l.wi).chain(&l.u))
+                .map(|(row, v)| {
+                    row[..n].copy_from_slice(v);
+                    &row[..n]
+                })
+                .collect();
+            let mut held: Vec<&mut [f32]> = outputs
+                .chunks_exact_mut(stride)
+                .map(|r| &mut r[..n])
+                .collect();
+            let mut held_ints = [vec![0; n], vec![0; n]];
+            eval_and_sample(&exec, c, &rows, &mut held, &mut held_ints, n);
+
+            // Rows of their own, in calls of one block.
+            let mut direct = vec![vec![0.0f32; n]; 16];
+            let mut direct_ints = [vec![0; n], vec![0; n]];
+            let own: Vec<&[f32]> =
+                l.wo.iter()
+                    .chain(&l.wi)
+                    .chain(&l.u)
+                    .map(|v| &v[..])
+                    .collect();
+            let mut out: Vec<&mut [f32]> = direct.iter_mut().map(|v| &mut v[..]).collect();
+            eval_and_sample(&exec, c, &own, &mut out, &mut direct_ints, BLOCK);
+
+            let what = format!("{:?}", kernels.isa());
+            for (k, (a, b)) in held.iter().zip(&direct).enumerate() {
+                let same = a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+                assert!(same, "{what}: output row {k} differs");
+            }
+            assert_eq!(held_ints, direct_ints, "{what}: flags or lobes differ");
+        }
+    }
 }

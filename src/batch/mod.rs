@@ -507,7 +507,7 @@ fn fused_eval(
         pdf: &mut out.pdf[local],
         held: None,
     };
-    if delay::holds_back(wo.x.len(), lanes.len()) {
+    if delay::streams(wo.x.len(), lanes.len()) && job.rows_collide() {
         ring = [[0.0; delay::DELAY]; 4];
         job.held = Some(&mut ring);
         return Some((fused.eval_held)(kernels, &mut job));
@@ -1090,8 +1090,17 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             wo: rows(input.wo, &(start..end)),
             u: [u.u_lobe, u.u0, u.u1].map(|row| &row[start..end]),
             out: out.finish_rows(&(0..end - start)),
+            held: None,
         };
-        if (fused.sample)(kernels, &mut job) {
+        let mut ring: delay::SampleRing;
+        let sample = if delay::streams(input.count, end - start) && job.rows_collide() {
+            ring = delay::SampleRing::default();
+            job.held = Some(ring.rows_like(&job.out));
+            fused.sample_held
+        } else {
+            fused.sample
+        };
+        if sample(kernels, &mut job) {
             return Ok(());
         }
         return sample_staged(kernels, input, u, start..end, start, s, out);

@@ -53,6 +53,16 @@ pub struct FusedEvalJob<'a> {
     pub held: Option<&'a mut EvalRing>,
 }
 
+impl FusedEvalJob<'_> {
+    /// Whether a row it writes [`delay::collide`]s with one it reads.
+    pub fn rows_collide(&self) -> bool {
+        let ([a, b, c], [d, e, f]) = (self.wo, self.wi);
+        let mut writes = vec![&*self.pdf];
+        writes.extend(self.value.iter().flatten().map(|r| &**r));
+        delay::collide(&[a, b, c, d, e, f], &writes)
+    }
+}
+
 /// A lobe's weight and selection probability over lanes.
 #[derive(Clone, Copy)]
 pub struct Term<L> {
@@ -432,6 +442,22 @@ pub struct FusedSampleJob<'a> {
     pub wo: [&'a [f32]; 3],
     pub u: [&'a [f32]; 3],
     pub out: FinishOutput<'a>,
+    /// The rows of a ring to hold the outputs back in ([`delay`]), as many as `out`
+    /// has, for calls that stream.
+    pub held: Option<FinishOutput<'a>>,
+}
+
+impl FusedSampleJob<'_> {
+    /// Whether a row it writes [`delay::collide`]s with one it reads (of the rows
+    /// every sample writes).
+    pub fn rows_collide(&self) -> bool {
+        let ([a, b, c], [d, e, f]) = (self.wo, self.u);
+        let o = &self.out;
+        let [w0, w1, w2] = &o.wi;
+        let [g0, g1, g2] = &o.weight;
+        let writes = [&**w0, &**w1, &**w2, &*o.pdf, &**g0, &**g1, &**g2];
+        delay::collide(&[a, b, c, d, e, f], &writes)
+    }
 }
 
 /// [`sample_lanes`] two registers at a time (`Lane::Interleaved`): a register's
@@ -439,11 +465,22 @@ pub struct FusedSampleJob<'a> {
 /// gaps (full Disney closure: AVX-512 85.6 -> 114.5 M lanes/s, AVX2 58.3 -> 69.5).
 #[inline(always)]
 fn sample_body<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
-    sample_lanes::<S, L::Interleaved>(job)
+    sample_lanes::<S, L::Interleaved>(job, None)
 }
 
+/// [`sample_body`] with the outputs held back in the job's ring ([`delay`]).
 #[inline(always)]
-fn sample_lanes<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
+fn sample_held_body<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
+    let ring = job.held.take();
+    sample_lanes::<S, L::Interleaved>(job, ring)
+}
+
+/// The lanes of a fused sample, their outputs held back in `ring` when given.
+#[inline(always)]
+fn sample_lanes<'a, S: Shape, L: Lane>(
+    job: &mut FusedSampleJob<'a>,
+    mut ring: Option<FinishOutput<'a>>,
+) -> bool {
     let len = job.out.pdf.len();
     let (params, terms) = uniform::<L>(&job.lobes);
     let p = S::prepare::<L>(&params);
@@ -469,7 +506,23 @@ fn sample_lanes<S: Shape, L: Lane>(job: &mut FusedSampleJob<'_>) -> bool {
         };
         let u = [reused, clamp_random(u0), clamp_random(u1)];
         let at = (frame, frame.to_local(wo));
-        sample_finished::<S, L>(&p, &terms, (chosen, at, u), job.mode, &mut job.out, (i, n));
+        let (out, slot) = match ring.as_mut() {
+            Some(held) => {
+                if i >= DELAY {
+                    let k = i - DELAY;
+                    delay::release_sample::<L>(held, &mut job.out, k % DELAY, k, L::LANES);
+                }
+                (held, i % DELAY)
+            }
+            None => (&mut job.out, i),
+        };
+        sample_finished::<S, L>(&p, &terms, (chosen, at, u), job.mode, out, (slot, n));
+    }
+    if let Some(held) = ring {
+        for k in delay::held(len, L::LANES) {
+            let n = L::LANES.min(len - k);
+            delay::release_sample::<L>(&held, &mut job.out, k % DELAY, k, n);
+        }
     }
     true
 }
@@ -627,6 +680,10 @@ kernel!(
     /// finite (outputs incomplete).
     sample<S: Shape>(job: &mut FusedSampleJob<'_>) -> bool => sample_body
 );
+kernel!(
+    /// [`sample`] with its outputs held back in the job's ring (`sample_held_body`).
+    sample_held<S: Shape>(job: &mut FusedSampleJob<'_>) -> bool => sample_held_body
+);
 
 /// A fused eval kernel.
 pub type FusedEval = fn(Kernels, &mut FusedEvalJob<'_>) -> bool;
@@ -648,12 +705,20 @@ type NoClearcoat = (Diffuse, Sheen, Specular);
 type NoSheen = (Diffuse, Specular, Clearcoat);
 type Plastic = (Diffuse, Specular);
 type Metal = (Specular, Clearcoat);
-const SHAPES: [(Matches, FusedEval, FusedEval, FusedSample, FusedRowsSample); 5] = [
+const SHAPES: [(
+    Matches,
+    FusedEval,
+    FusedEval,
+    FusedSample,
+    FusedSample,
+    FusedRowsSample,
+); 5] = [
     (
         Every::matches,
         eval::<Every>,
         eval_held::<Every>,
         sample::<Every>,
+        sample_held::<Every>,
         rows::<Every>,
     ),
     (
@@ -661,6 +726,7 @@ const SHAPES: [(Matches, FusedEval, FusedEval, FusedSample, FusedRowsSample); 5]
         eval::<NoClearcoat>,
         eval_held::<NoClearcoat>,
         sample::<NoClearcoat>,
+        sample_held::<NoClearcoat>,
         rows::<NoClearcoat>,
     ),
     (
@@ -668,6 +734,7 @@ const SHAPES: [(Matches, FusedEval, FusedEval, FusedSample, FusedRowsSample); 5]
         eval::<NoSheen>,
         eval_held::<NoSheen>,
         sample::<NoSheen>,
+        sample_held::<NoSheen>,
         rows::<NoSheen>,
     ),
     (
@@ -675,6 +742,7 @@ const SHAPES: [(Matches, FusedEval, FusedEval, FusedSample, FusedRowsSample); 5]
         eval::<Plastic>,
         eval_held::<Plastic>,
         sample::<Plastic>,
+        sample_held::<Plastic>,
         rows::<Plastic>,
     ),
     (
@@ -682,6 +750,7 @@ const SHAPES: [(Matches, FusedEval, FusedEval, FusedSample, FusedRowsSample); 5]
         eval::<Metal>,
         eval_held::<Metal>,
         sample::<Metal>,
+        sample_held::<Metal>,
         rows::<Metal>,
     ),
 ];
@@ -702,6 +771,8 @@ pub struct Fused<'a> {
     /// `eval` for a job with a ring ([`FusedEvalJob::held`]).
     pub eval_held: FusedEval,
     pub sample: FusedSample,
+    /// `sample` for a job with a ring ([`FusedSampleJob::held`]).
+    pub sample_held: FusedSample,
     pub lobes: [FusedLobe<'a>; MAX_FUSED],
 }
 
@@ -716,7 +787,8 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
         *m = l.lobe.model();
     }
     let models = &models[..lobes.len()];
-    let &(_, eval, eval_held, sample, _) = SHAPES.iter().find(|(matches, ..)| matches(models))?;
+    let &(_, eval, eval_held, sample, sample_held, _) =
+        SHAPES.iter().find(|(matches, ..)| matches(models))?;
     let mut out = [FusedLobe {
         params: &[],
         weight: Rgb::new(0.0, 0.0, 0.0),
@@ -734,6 +806,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
         eval,
         eval_held,
         sample,
+        sample_held,
         lobes: out,
     })
 }
