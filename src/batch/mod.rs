@@ -496,7 +496,6 @@ fn fused_eval(
     }
     let fused = fused::for_closure(closure)?;
     let local = lanes.start - base..lanes.end - base;
-    let mut ring: delay::EvalRing;
     let mut job = FusedEvalJob {
         mode: closure.transport(),
         frame,
@@ -508,9 +507,9 @@ fn fused_eval(
         held: None,
     };
     if delay::streams(wo.x.len(), lanes.len()) && job.rows_collide() {
-        ring = [[0.0; delay::DELAY]; 4];
-        job.held = Some(&mut ring);
-        return Some((fused.eval_held)(kernels, &mut job));
+        return Some(with_scratch(|s| {
+            (fused.eval_held)(kernels, &mut job.with_ring(s.rings.eval()))
+        }));
     }
     Some((fused.eval)(kernels, &mut job))
 }
@@ -1092,10 +1091,8 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             out: out.finish_rows(&(0..end - start)),
             held: None,
         };
-        let mut ring: delay::SampleRing;
         let sample = if delay::streams(input.count, end - start) && job.rows_collide() {
-            ring = delay::SampleRing::default();
-            job.held = Some(ring.rows_like(&job.out));
+            job.held = Some(s.rings.sample().rows_like(&job.out));
             fused.sample_held
         } else {
             fused.sample

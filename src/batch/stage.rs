@@ -474,6 +474,8 @@ pub(super) struct Scratch {
     pub chunk: Vec<u32>,
     pub material: super::material::SlotRows,
     pub compact: Compact,
+    /// Rings to hold a streaming call's outputs back in (`kernels::delay`).
+    pub rings: crate::kernels::delay::Rings,
 }
 
 /// An in-place mixture sample's chunk in the order of the lobes its lanes chose

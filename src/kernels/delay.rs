@@ -11,9 +11,11 @@
 //! in an ad hoc C loop: 270-302 M lanes/s with the rows 16 bytes apart and 267-313
 //! with them all at one offset, against 405-452 with the rows 4 KB apart. Where some
 //! row written [`collide`]s with a row read, the fused eval and sample of a call that
-//! streams therefore keep each register's results in a ring on the stack and store
-//! them to the caller's rows `DELAY` lanes later, 2 KB from the lines being read:
-//! the eval 19-24% and 22-35% faster in those two layouts. Elsewhere they store
+//! streams therefore keep each register's results in a ring (a thread's, on the heap:
+//! [`Rings`]) and store them to the caller's rows `DELAY` lanes later, 2 KB from the
+//! lines being read: the eval 19-24% and 22-35% faster in those two layouts. Where the
+//! ring lies against the host's rows moves these figures by up to 10% from one
+//! process to the next (its address, like theirs, varies). Elsewhere the kernels store
 //! directly: with the rows 4 KB apart the ring cost an eval 3-7% and a sample up to
 //! 14%.
 
@@ -65,37 +67,56 @@ pub fn release<L: Lane>(from: &[f32], to: &mut [f32], slot: usize, at: usize, n:
     store(L::load(&from[slot..]), to, at, n);
 }
 
-/// An eval's ring: `value` (RGB) and `pdf`.
-pub type EvalRing = [[f32; DELAY]; 4];
-
 /// [`release`] of a row of integers (flags, components, lobes: only when asked for).
 #[inline(always)]
 fn release_ints(from: &[u32], to: &mut [u32], slot: usize, at: usize, n: usize) {
     to[at..at + n].copy_from_slice(&from[slot..slot + n]);
 }
 
+/// An eval's ring: `value` (RGB) and `pdf`.
+pub type EvalRing = [[f32; DELAY]; 4];
+
 /// A sample's ring, with a row for each output a [`FinishOutput`] may have.
 pub struct SampleRing {
     /// `wi`, `pdf`, `weight`, `value`, `eta`, `roughness`.
-    floats: [[f32; DELAY]; 12],
+    floats: Box<[[f32; DELAY]; 12]>,
     /// `flags`, `component`, `lobe`.
-    ints: [[u32; DELAY]; 3],
+    ints: Box<[[u32; DELAY]; 3]>,
 }
 
-impl Default for SampleRing {
-    fn default() -> Self {
-        SampleRing {
-            floats: [[0.0; DELAY]; 12],
-            ints: [[0; DELAY]; 3],
-        }
+/// A thread's rings, on the heap and made once: a host may call from a thread with a
+/// small stack (a fiber), and a sample's ring takes 30 KB. Every slot a call releases
+/// it has written first, so a ring needs no clearing between calls.
+#[derive(Default)]
+pub struct Rings {
+    eval: Option<Box<EvalRing>>,
+    sample: Option<SampleRing>,
+}
+
+impl Rings {
+    pub fn eval(&mut self) -> &mut EvalRing {
+        self.eval.get_or_insert_with(rows)
     }
+
+    pub fn sample(&mut self) -> &mut SampleRing {
+        self.sample.get_or_insert_with(|| SampleRing {
+            floats: rows(),
+            ints: rows(),
+        })
+    }
+}
+
+/// `R` rows of `DELAY` values, made on the heap.
+fn rows<T: Copy + Default, const R: usize>() -> Box<[[T; DELAY]; R]> {
+    let rows = vec![[T::default(); DELAY]; R].into_boxed_slice();
+    rows.try_into().unwrap_or_else(|_| unreachable!("R rows"))
 }
 
 impl SampleRing {
     /// The ring as an output with the rows `like` has.
     pub fn rows_like(&mut self, like: &FinishOutput<'_>) -> FinishOutput<'_> {
-        let [w0, w1, w2, pdf, g0, g1, g2, v0, v1, v2, eta, roughness] = &mut self.floats;
-        let [flags, component, lobe] = &mut self.ints;
+        let [w0, w1, w2, pdf, g0, g1, g2, v0, v1, v2, eta, roughness] = &mut *self.floats;
+        let [flags, component, lobe] = &mut *self.ints;
         FinishOutput {
             wi: [w0, w1, w2],
             pdf,

@@ -53,7 +53,15 @@ pub struct FusedEvalJob<'a> {
     pub held: Option<&'a mut EvalRing>,
 }
 
-impl FusedEvalJob<'_> {
+impl<'a> FusedEvalJob<'a> {
+    /// The job with its outputs held back in `ring`.
+    pub fn with_ring(self, ring: &'a mut EvalRing) -> Self {
+        FusedEvalJob {
+            held: Some(ring),
+            ..self
+        }
+    }
+
     /// Whether a row it writes [`delay::collide`]s with one it reads.
     pub fn rows_collide(&self) -> bool {
         let ([a, b, c], [d, e, f]) = (self.wo, self.wi);
