@@ -826,6 +826,14 @@ fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
                 .chunks_exact_mut(stride)
                 .map(|r| &mut r[..n])
                 .collect();
+            // On rayon's workers (a ring per thread), then on the caller's thread.
+            let pool = Exec {
+                kernels,
+                threads: Threads::Global,
+            };
+            let mut again_ints = [vec![0; n], vec![0; n]];
+            eval_and_sample(&pool, c, &rows, &mut held, &mut again_ints, n);
+            let again: Vec<Vec<f32>> = held.iter().map(|r| r.to_vec()).collect();
             let mut held_ints = [vec![0; n], vec![0; n]];
             eval_and_sample(&exec, c, &rows, &mut held, &mut held_ints, n);
 
@@ -847,6 +855,14 @@ fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
                 assert!(same, "{what}: output row {k} differs");
             }
             assert_eq!(held_ints, direct_ints, "{what}: flags or lobes differ");
+            for (k, (a, b)) in again.iter().zip(&direct).enumerate() {
+                let same = a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+                assert!(same, "{what}, rayon's workers: output row {k} differs");
+            }
+            assert_eq!(
+                again_ints, direct_ints,
+                "{what}, rayon's workers: flags or lobes"
+            );
         }
     }
 }

@@ -131,6 +131,24 @@ impl SampleRing {
     }
 }
 
+/// An eval ring's sums of lanes `at..at + n` to the caller's rows.
+#[inline(always)]
+pub fn release_eval<L: Lane>(
+    ring: &EvalRing,
+    value: &mut Option<[&mut [f32]; 3]>,
+    pdf: &mut [f32],
+    at: usize,
+    n: usize,
+) {
+    let slot = at % DELAY;
+    if let Some(rows) = value {
+        for (from, to) in ring.iter().zip(rows.iter_mut()) {
+            release::<L>(from, to, slot, at, n);
+        }
+    }
+    release::<L>(&ring[3], pdf, slot, at, n);
+}
+
 /// Every row of `to` that `from` has: lanes `slot..slot + n` of `from` to `at..`.
 #[inline(always)]
 pub fn release_sample<L: Lane>(

@@ -65,9 +65,12 @@ impl<'a> FusedEvalJob<'a> {
     /// Whether a row it writes [`delay::collide`]s with one it reads.
     pub fn rows_collide(&self) -> bool {
         let ([a, b, c], [d, e, f]) = (self.wo, self.wi);
-        let mut writes = vec![&*self.pdf];
-        writes.extend(self.value.iter().flatten().map(|r| &**r));
-        delay::collide(&[a, b, c, d, e, f], &writes)
+        let pdf = &*self.pdf;
+        let [red, green, blue] = match &self.value {
+            Some([r, g, b]) => [&**r, &**g, &**b],
+            None => [pdf; 3],
+        };
+        delay::collide(&[a, b, c, d, e, f], &[red, green, blue, pdf])
     }
 }
 
@@ -321,7 +324,7 @@ fn eval_lanes<S: Shape, L: Lane>(
         match ring.as_deref_mut() {
             Some(ring) => {
                 if i >= DELAY {
-                    release_sums::<L>(ring, &mut value, job.pdf, i - DELAY, L::LANES);
+                    delay::release_eval::<L>(ring, &mut value, job.pdf, i - DELAY, L::LANES);
                 }
                 let [r, g, b, pdf] = ring;
                 let mut rgb = Some([&mut r[..], &mut g[..], &mut b[..]]);
@@ -332,28 +335,10 @@ fn eval_lanes<S: Shape, L: Lane>(
     }
     if let Some(ring) = ring {
         for k in delay::held(len, L::LANES) {
-            release_sums::<L>(ring, &mut value, job.pdf, k, L::LANES.min(len - k));
+            delay::release_eval::<L>(ring, &mut value, job.pdf, k, L::LANES.min(len - k));
         }
     }
     true
-}
-
-/// The ring's sums of lanes `at..at + n` to the caller's rows ([`delay`]).
-#[inline(always)]
-fn release_sums<L: Lane>(
-    ring: &EvalRing,
-    value: &mut Option<[&mut [f32]; 3]>,
-    pdf: &mut [f32],
-    at: usize,
-    n: usize,
-) {
-    let slot = at % DELAY;
-    if let Some(rows) = value {
-        for (from, to) in ring.iter().zip(rows.iter_mut()) {
-            delay::release::<L>(from, to, slot, at, n);
-        }
-    }
-    delay::release::<L>(&ring[3], pdf, slot, at, n);
 }
 
 /// A closure's lobe indices as [`Shape::sample`]'s labels.
