@@ -73,15 +73,34 @@ fn release_ints(from: &[u32], to: &mut [u32], slot: usize, at: usize, n: usize) 
     to[at..at + n].copy_from_slice(&from[slot..slot + n]);
 }
 
+/// A ring's row, on whole cache lines: a register stored to or loaded from a row at a
+/// register's lane is then one line, not two (a split access).
+#[derive(Clone, Copy)]
+#[repr(align(64))]
+pub struct Row<T>([T; DELAY]);
+
+impl<T> std::ops::Deref for Row<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        &self.0
+    }
+}
+
+impl<T> std::ops::DerefMut for Row<T> {
+    fn deref_mut(&mut self) -> &mut [T] {
+        &mut self.0
+    }
+}
+
 /// An eval's ring: `value` (RGB) and `pdf`.
-pub type EvalRing = [[f32; DELAY]; 4];
+pub type EvalRing = [Row<f32>; 4];
 
 /// A sample's ring, with a row for each output a [`FinishOutput`] may have.
 pub struct SampleRing {
     /// `wi`, `pdf`, `weight`, `value`, `eta`, `roughness`.
-    floats: Box<[[f32; DELAY]; 12]>,
+    floats: Box<[Row<f32>; 12]>,
     /// `flags`, `component`, `lobe`.
-    ints: Box<[[u32; DELAY]; 3]>,
+    ints: Box<[Row<u32>; 3]>,
 }
 
 /// A thread's rings, on the heap and made once: a host may call from a thread with a
@@ -107,8 +126,8 @@ impl Rings {
 }
 
 /// `R` rows of `DELAY` values, made on the heap.
-fn rows<T: Copy + Default, const R: usize>() -> Box<[[T; DELAY]; R]> {
-    let rows = vec![[T::default(); DELAY]; R].into_boxed_slice();
+fn rows<T: Copy + Default, const R: usize>() -> Box<[Row<T>; R]> {
+    let rows = vec![Row([T::default(); DELAY]); R].into_boxed_slice();
     rows.try_into().unwrap_or_else(|_| unreachable!("R rows"))
 }
 

@@ -13,8 +13,8 @@
 use super::delay::{self, DELAY, EvalRing};
 use super::mixture::{self, clamp_random};
 use super::{
-    Directions, FinishOutput, MAX_LOBE_PARAMS, direction, load, load_frame, pack_events, rgb_at,
-    store, store_finished,
+    Directions, FinishOutput, MAX_LOBE_PARAMS, direction, load, load_frame, load3, pack_events,
+    rgb_at, store, store_finished, unit_in_range,
 };
 use crate::closure::Closure;
 use crate::lobes::disney_clearcoat::DisneyClearcoat;
@@ -280,7 +280,7 @@ fn store_sums<L: Lane>(
 /// Rapids Xeon (full Disney closure, AVX-512: 266 against 287 M lanes/s; AVX2 211, 209).
 #[inline(always)]
 fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
-    eval_lanes::<S, L>(job, None)
+    eval_lanes::<S, L, false>(job, None)
 }
 
 /// [`eval_body`] with the outputs held back in the job's ring ([`delay`]): a kernel
@@ -288,12 +288,12 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
 #[inline(always)]
 fn eval_held_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
     let ring = job.held.take();
-    eval_lanes::<S, L>(job, ring)
+    eval_lanes::<S, L, true>(job, ring)
 }
 
 /// [`eval_body`] with its outputs held back in `ring` (when given, see [`delay`]).
 #[inline(always)]
-fn eval_lanes<S: Shape, L: Lane>(
+fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
     job: &mut FusedEvalJob<'_>,
     mut ring: Option<&mut EvalRing>,
 ) -> bool {
@@ -312,10 +312,24 @@ fn eval_lanes<S: Shape, L: Lane>(
         .value
         .as_mut()
         .map(|[r, g, b]| [&mut r[..len], &mut g[..len], &mut b[..len]]);
+    // A held call loads each register's directions one register ahead, before the
+    // last one's results are stored: more loads in flight over rows that stream.
+    // Not in the other loop, where it cost 8% with the rows 16 KB apart at 4096 lanes.
+    let first = if HELD { 0 } else { len };
+    let mut next = (ahead::<L>(wo_rows, first), ahead::<L>(wi_rows, first));
     for i in (0..len).step_by(L::LANES) {
         let n = L::LANES.min(len - i);
-        let wo = direction(wo_rows, i, n, Directions::Raw, &mut out_of_range);
-        let wi = direction(wi_rows, i, n, Directions::Raw, &mut out_of_range);
+        let (wo, wi) = if HELD {
+            let d = next;
+            let at = i + L::LANES;
+            next = (ahead::<L>(wo_rows, at), ahead::<L>(wi_rows, at));
+            d
+        } else {
+            (load3::<L>(wo_rows, i, n), load3::<L>(wi_rows, i, n))
+        };
+        let (wo, ok_o) = unit_in_range(wo);
+        let (wi, ok_i) = unit_in_range(wi);
+        out_of_range |= !(ok_o & ok_i).all();
         if out_of_range {
             return false;
         }
@@ -339,6 +353,14 @@ fn eval_lanes<S: Shape, L: Lane>(
         }
     }
     true
+}
+
+/// [`load3`] of the register at lane `i`, which may lie past the rows' end (no lane
+/// is read there).
+#[inline(always)]
+fn ahead<L: Lane>(rows: [&[f32]; 3], i: usize) -> Vec3<L> {
+    let i = i.min(rows[0].len());
+    load3(rows, i, L::LANES.min(rows[0].len() - i))
 }
 
 /// A closure's lobe indices as [`Shape::sample`]'s labels.
