@@ -738,7 +738,9 @@ extern "C" {
  lanes may be left unwritten).
 
  # Safety
- `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`.
+ `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`. No
+ output array of a batch call overlaps another of its arrays (a failing call zeroes
+ its outputs first; kernels store a lane after reading later lanes).
  */
 glint_status glint_eval_batch(const struct glint_eval_batch_args *args);
 

@@ -358,7 +358,9 @@ macro_rules! with_input {
 /// lanes may be left unwritten).
 ///
 /// # Safety
-/// `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`.
+/// `args` is NULL or valid; its pointers as documented on `glint_eval_batch_args`. No
+/// output array of a batch call overlaps another of its arrays (a failing call zeroes
+/// its outputs first; kernels store a lane after reading later lanes).
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn glint_eval_batch(args: *const glint_eval_batch_args) -> glint_status {
     guard(|| {

@@ -312,9 +312,15 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
         .value
         .as_mut()
         .map(|[r, g, b]| [&mut r[..len], &mut g[..len], &mut b[..len]]);
-    // A held call loads each register's directions one register ahead, before the
-    // last one's results are stored: more loads in flight over rows that stream.
-    // Not in the other loop, where it cost 8% with the rows 16 KB apart at 4096 lanes.
+    // Without a ring each register's sums are stored two registers later, after the
+    // next loads: a host's rows often lie within a few hundred bytes of each other
+    // modulo 4 KB (the script's at 4096 lanes), and a load waits on an older store
+    // whose address matches its bits 0-11 (4K aliasing). Paired C loop, 4096 lanes:
+    // +7.8% in the script's layout, +4% with the rows 16 KB apart (one register
+    // later gained half as much, three lost 2-3%). A held call instead loads each
+    // register's directions one register ahead: more loads in flight over rows that
+    // stream (1M lanes, +2% to +7%); in this loop that cost 8% at 4096 lanes.
+    let (mut pending, mut later) = (None, None);
     let first = if HELD { 0 } else { len };
     let mut next = (ahead::<L>(wo_rows, first), ahead::<L>(wi_rows, first));
     for i in (0..len).step_by(L::LANES) {
@@ -327,6 +333,10 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
         } else {
             (load3::<L>(wo_rows, i, n), load3::<L>(wi_rows, i, n))
         };
+        if let Some((sums, k, m)) = pending.take() {
+            store_sums(sums, &mut value, job.pdf, k, m);
+        }
+        pending = later.take();
         let (wo, ok_o) = unit_in_range(wo);
         let (wi, ok_i) = unit_in_range(wi);
         out_of_range |= !(ok_o & ok_i).all();
@@ -344,8 +354,14 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
                 let mut rgb = Some([&mut r[..], &mut g[..], &mut b[..]]);
                 store_sums(sums, &mut rgb, pdf, i % DELAY, n);
             }
-            None => store_sums(sums, &mut value, job.pdf, i, n),
+            None => later = Some((sums, i, n)),
         }
+    }
+    if let Some((sums, k, m)) = pending {
+        store_sums(sums, &mut value, job.pdf, k, m);
+    }
+    if let Some((sums, k, m)) = later {
+        store_sums(sums, &mut value, job.pdf, k, m);
     }
     if let Some(ring) = ring {
         for k in delay::held(len, L::LANES) {
