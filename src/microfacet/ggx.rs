@@ -56,7 +56,11 @@ impl<L: Lane> Ndf<L> for Ggx<L> {
     fn sample(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
         let w = upper(w);
         let (ax, ay) = (self.alpha_x, self.alpha_y);
-        let v = Vec3::new(ax * w.x, ay * w.y, w.z).normalize();
+        // The stretched view made unit by `rsqrt` (relative error 2.1e-7: the caps'
+        // density moves by as little; the sample's value and pdf come from its settled
+        // direction): a fused Disney sample 2-4% faster than with a division and a
+        // square root. `|v|^2 >= min(1, ax, ay)^2`, a normal float.
+        let v = Vec3::new(ax * w.x, ay * w.y, w.z).normalize_estimate();
         // The cap's height z = (1 - u0)(1 + v.z) - v.z, measured from both ends without
         // cancellation: z + v.z = (1 - u0)(1 + v.z) and, with 1 - v.z^2 = |v.xy|^2,
         // 1 - z^2 = u0 (|v.xy|^2 + (1 - u0)(1 + v.z)^2).
