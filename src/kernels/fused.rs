@@ -319,7 +319,7 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
     // +7.8% in the script's layout, +4% with the rows 16 KB apart (one register
     // later gained half as much, three lost 2-3%). A held call instead loads each
     // register's directions one register ahead: more loads in flight over rows that
-    // stream (1M lanes, +2% to +7%); in this loop that cost 8% at 4096 lanes.
+    // stream (1M lanes, +2% to +7%); without a ring that cost 8% at 4096 lanes.
     let (mut pending, mut later) = (None, None);
     let first = if HELD { 0 } else { len };
     let mut next = (ahead::<L>(wo_rows, first), ahead::<L>(wi_rows, first));
