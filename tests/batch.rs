@@ -795,17 +795,19 @@ fn eval_and_sample(
 }
 
 /// A call of STREAMING_LANES or more whose rows collide in the L2 cache's sets (the
-/// rows of one allocation, 16 bytes apart in its 128 KB cycle) holds its outputs back
+/// rows of one allocation, 20 bytes apart in its 128 KB cycle) holds its outputs back
 /// in a ring (kernels::delay): the same bits as calls too small to stream over rows
-/// of their own. A last block past the ring's length ends in a partial register.
+/// of their own. The rows start at every offset within a line a float may (the ring
+/// releases each row's registers moved onto its lines); a last block past the ring's
+/// length ends in a partial register.
 #[test]
 fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
     let mut rng = Rng::new(34);
     let all = closures(&mut rng);
     let n = STREAMING_LANES + DELAY + 37;
     let l = lanes(n, 1, &mut rng);
-    // One allocation, a row every 128 KB and 16 bytes.
-    let stride = n.next_multiple_of(32 << 10) + 4;
+    // One allocation, a row every 128 KB and 20 bytes.
+    let stride = n.next_multiple_of(32 << 10) + 5;
     for c in &all {
         for kernels in Kernels::available() {
             let exec = Exec {
@@ -826,6 +828,9 @@ fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
                 .chunks_exact_mut(stride)
                 .map(|r| &mut r[..n])
                 .collect();
+            let offsets: std::collections::BTreeSet<usize> =
+                held.iter().map(|r| r.as_ptr() as usize % 64).collect();
+            assert_eq!(offsets.len(), 16, "output rows at every offset in a line");
             // On rayon's workers (a ring per thread), then on the caller's thread.
             let pool = Exec {
                 kernels,

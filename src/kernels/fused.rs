@@ -321,6 +321,7 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
     // register's directions one register ahead: more loads in flight over rows that
     // stream (1M lanes, +2% to +7%); without a ring that cost 8% at 4096 lanes.
     let (mut pending, mut later) = (None, None);
+    let shifts = delay::eval_shifts::<L>(&value, job.pdf);
     let first = if HELD { 0 } else { len };
     let mut next = (ahead::<L>(wo_rows, first), ahead::<L>(wi_rows, first));
     for i in (0..len).step_by(L::LANES) {
@@ -348,11 +349,13 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
         match ring.as_deref_mut() {
             Some(ring) => {
                 if i >= DELAY {
-                    delay::release_eval::<L>(ring, &mut value, job.pdf, i - DELAY, L::LANES);
+                    let at = i - DELAY;
+                    delay::release_eval::<L, false>(ring, &mut value, job.pdf, at, shifts, len);
                 }
-                let [r, g, b, pdf] = ring;
+                let [r, g, b, pdf] = &mut *ring;
                 let mut rgb = Some([&mut r[..], &mut g[..], &mut b[..]]);
-                store_sums(sums, &mut rgb, pdf, i % DELAY, n);
+                store_sums(sums, &mut rgb, pdf, i % DELAY, L::LANES);
+                delay::wrap_eval::<L>(ring, &mut value, job.pdf, i);
             }
             None => later = Some((sums, i, n)),
         }
@@ -365,7 +368,7 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
     }
     if let Some(ring) = ring {
         for k in delay::held(len, L::LANES) {
-            delay::release_eval::<L>(ring, &mut value, job.pdf, k, L::LANES.min(len - k));
+            delay::release_eval::<L, true>(ring, &mut value, job.pdf, k, shifts, len);
         }
     }
     true
@@ -521,6 +524,7 @@ fn sample_lanes<'a, S: Shape, L: Lane>(
         *q = l.probability;
     }
     let probabilities = &probabilities[..S::LOBES];
+    let shifts = delay::sample_shifts::<L>(&job.out);
     let mut out_of_range = false;
     for i in (0..len).step_by(L::LANES) {
         let n = L::LANES.min(len - i);
@@ -541,18 +545,21 @@ fn sample_lanes<'a, S: Shape, L: Lane>(
             Some(held) => {
                 if i >= DELAY {
                     let k = i - DELAY;
-                    delay::release_sample::<L>(held, &mut job.out, k % DELAY, k, L::LANES);
+                    delay::release_sample::<L, false>(held, &mut job.out, k, &shifts, len);
                 }
-                (held, i % DELAY)
+                // A whole register: the ring's rows are long enough.
+                (held, (i % DELAY, L::LANES))
             }
-            None => (&mut job.out, i),
+            None => (&mut job.out, (i, n)),
         };
-        sample_finished::<S, L>(&p, &terms, (chosen, at, u), job.mode, out, (slot, n));
+        sample_finished::<S, L>(&p, &terms, (chosen, at, u), job.mode, out, slot);
+        if let Some(held) = ring.as_mut() {
+            delay::wrap_sample::<L>(held, &mut job.out, i);
+        }
     }
     if let Some(held) = ring {
         for k in delay::held(len, L::LANES) {
-            let n = L::LANES.min(len - k);
-            delay::release_sample::<L>(&held, &mut job.out, k % DELAY, k, n);
+            delay::release_sample::<L, true>(&held, &mut job.out, k, &shifts, len);
         }
     }
     true
