@@ -24,9 +24,9 @@
 //! every row 16 bytes past a line (as NumPy's), medians of ten processes: eval 368 ->
 //! 383 M lanes/s, sample 132 -> 154; with the written rows on lines already, 394 and
 //! 156 before, 391 and 154 after. In `bench_vs_mitsuba.py`'s own arrays
-//! (`bench_glint_pair.py`, 1M lanes): eval +10.3% and +5.5%, sample within 1%. Rows
-//! that do not collide keep their direct stores even off lines (rows 12 KB apart, 16
-//! bytes past lines: eval 417 direct against 406 through the ring).
+//! (`bench_glint_pair.py`, 1M lanes): eval +10.3%, +5.5%, +4.6%, sample within 1.1%.
+//! Rows that do not collide keep their direct stores even off lines (rows 12 KB apart,
+//! 16 bytes past lines: eval 417 direct against 406 through the ring).
 
 use super::{FinishOutput, store};
 use crate::math::Lane;
@@ -85,36 +85,23 @@ pub fn line_shift<L: Lane>(row: &[f32]) -> usize {
 
 /// The register of lanes `at..` (a loop's, `DELAY` behind it) released from `from`'s
 /// ring to `to`, moved by `to`'s [`line_shift`] `shift`: lanes `at + shift..`, the
-/// ring's [`MIRROR`] holding those past its end. Only whole registers: no tail's code
-/// (nor its `memcpy`) in a kernel's loop.
+/// ring's [`MIRROR`] holding those past its end. In a kernel's loop whole registers
+/// only (no tail's code, nor its `memcpy`); `LAST` (the last `DELAY` lanes, after the
+/// loop): only the lanes before `len`.
 #[inline(always)]
-pub fn release<L: Lane>(from: &[f32], to: &mut [f32], at: usize, shift: usize) {
-    L::load(&from[at % DELAY + shift..]).store(&mut to[at + shift..]);
-}
-
-/// [`release`] of a register of the last `DELAY` lanes: only those before `len`.
-#[inline(always)]
-fn release_last<L: Lane>(from: &[f32], to: &mut [f32], at: usize, shift: usize, len: usize) {
-    let start = at + shift;
-    if start < len {
-        let n = L::LANES.min(len - start);
-        store(L::load(&from[at % DELAY + shift..]), to, start, n);
-    }
-}
-
-/// [`release`] or, `LAST`, [`release_last`].
-#[inline(always)]
-fn put<L: Lane, const LAST: bool>(
+fn release<L: Lane, const LAST: bool>(
     from: &[f32],
     to: &mut [f32],
     at: usize,
     shift: usize,
     len: usize,
 ) {
-    if LAST {
-        release_last::<L>(from, to, at, shift, len);
-    } else {
-        release::<L>(from, to, at, shift);
+    let start = at + shift;
+    let v = L::load(&from[at % DELAY + shift..]);
+    if !LAST {
+        v.store(&mut to[start..]);
+    } else if start < len {
+        store(v, to, start, L::LANES.min(len - start));
     }
 }
 
@@ -201,7 +188,7 @@ impl Rings {
     }
 }
 
-/// `R` rows of `DELAY` values, made on the heap.
+/// `R` rows of `DELAY` values and their mirror, made on the heap.
 fn rows<T: Copy + Default, const R: usize>() -> Box<[Row<T>; R]> {
     let rows = vec![Row([T::default(); DELAY + MIRROR]); R].into_boxed_slice();
     rows.try_into().unwrap_or_else(|_| unreachable!("R rows"))
@@ -244,8 +231,8 @@ pub fn eval_shifts<L: Lane>(value: &Option<[&mut [f32]; 3]>, pdf: &[f32]) -> Eva
     }
 }
 
-/// An eval ring's sums of the register at `at` to the caller's rows ([`release`];
-/// `LAST`: [`release_last`] over rows of `len` lanes).
+/// An eval ring's sums of the register at `at` to the caller's rows of `len` lanes
+/// ([`release`]).
 #[inline(always)]
 pub fn release_eval<L: Lane, const LAST: bool>(
     ring: &EvalRing,
@@ -256,11 +243,11 @@ pub fn release_eval<L: Lane, const LAST: bool>(
     len: usize,
 ) {
     if let Some([r, g, b]) = value {
-        put::<L, LAST>(&ring[0], r, at, shifts[0], len);
-        put::<L, LAST>(&ring[1], g, at, shifts[1], len);
-        put::<L, LAST>(&ring[2], b, at, shifts[2], len);
+        release::<L, LAST>(&ring[0], r, at, shifts[0], len);
+        release::<L, LAST>(&ring[1], g, at, shifts[1], len);
+        release::<L, LAST>(&ring[2], b, at, shifts[2], len);
     }
-    put::<L, LAST>(&ring[3], pdf, at, shifts[3], len);
+    release::<L, LAST>(&ring[3], pdf, at, shifts[3], len);
 }
 
 /// [`wrap`] of an eval ring's rows, the register at `at` just stored.
@@ -307,8 +294,8 @@ pub fn sample_shifts<L: Lane>(o: &FinishOutput<'_>) -> SampleShifts {
     ]
 }
 
-/// Every row of `to` that `from` has, the register at `at` released ([`release`];
-/// `LAST`: [`release_last`] over rows of `len` lanes); the integer rows as they are.
+/// Every row of `to` that `from` has, the register at `at` released to rows of `len`
+/// lanes ([`release`]); the integer rows as they are.
 #[inline(always)]
 pub fn release_sample<L: Lane, const LAST: bool>(
     from: &FinishOutput<'_>,
@@ -318,22 +305,22 @@ pub fn release_sample<L: Lane, const LAST: bool>(
     len: usize,
 ) {
     for (k, (f, t)) in from.wi.iter().zip(to.wi.iter_mut()).enumerate() {
-        put::<L, LAST>(f, t, at, shifts[k], len);
+        release::<L, LAST>(f, t, at, shifts[k], len);
     }
-    put::<L, LAST>(from.pdf, to.pdf, at, shifts[3], len);
+    release::<L, LAST>(from.pdf, to.pdf, at, shifts[3], len);
     for (k, (f, t)) in from.weight.iter().zip(to.weight.iter_mut()).enumerate() {
-        put::<L, LAST>(f, t, at, shifts[4 + k], len);
+        release::<L, LAST>(f, t, at, shifts[4 + k], len);
     }
     if let (Some(from), Some(to)) = (&from.value, &mut to.value) {
         for (k, (f, t)) in from.iter().zip(to.iter_mut()).enumerate() {
-            put::<L, LAST>(f, t, at, shifts[7 + k], len);
+            release::<L, LAST>(f, t, at, shifts[7 + k], len);
         }
     }
     if let (Some(f), Some(t)) = (&from.eta, &mut to.eta) {
-        put::<L, LAST>(f, t, at, shifts[10], len);
+        release::<L, LAST>(f, t, at, shifts[10], len);
     }
     if let (Some(f), Some(t)) = (&from.roughness, &mut to.roughness) {
-        put::<L, LAST>(f, t, at, shifts[11], len);
+        release::<L, LAST>(f, t, at, shifts[11], len);
     }
     let n = if LAST {
         L::LANES.min(len - at)
