@@ -70,7 +70,8 @@ def ensure_libllvm():
 
 
 def ensure_mitsuba():
-    """Import mitsuba, or install it into target/bench-venv and re-run there."""
+    """Import mitsuba, or install it into target/bench-venv and re-run the calling
+    script there."""
     if all(importlib.util.find_spec(m) for m in ("mitsuba", "numpy")):
         return
     python = VENV / "bin" / "python"
@@ -79,7 +80,7 @@ def ensure_mitsuba():
     if not python.exists():
         run([sys.executable, "-m", "venv", str(VENV)])
     run([str(python), "-m", "pip", "install", "-q", "mitsuba", "numpy"])
-    os.execv(str(python), [str(python), __file__] + sys.argv[1:])
+    os.execv(str(python), [str(python), os.path.abspath(sys.argv[0])] + sys.argv[1:])
 
 
 def build_glint():
