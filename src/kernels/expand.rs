@@ -108,6 +108,15 @@ pub struct RawValue<'a> {
     pub max: f32,
 }
 
+impl RawValue<'_> {
+    /// No row: a placeholder.
+    const NONE: Self = RawValue {
+        row: &[],
+        min: 0.0,
+        max: 0.0,
+    };
+}
+
 /// An eval in the expansion's pass: what `kernels::fused::rows` computes from the rows
 /// (`sum_k weight_k f_k` and `sum_k p_k pdf_k` over the kept slots, in slot order, each
 /// term as the eval kernels compute it), from the registers instead.
@@ -407,42 +416,47 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
     // Out of the loop: each register writes what it reads.
     let mut decoded = [[L::zero(); MAX_DECODED_LEN]; MAX_SLOTS];
     let mut in_range = L::Mask::splat(true);
+    // The values with rows, listed once: each register reads only those (a loop over
+    // every value testing for a row was 4% of a Disney eval's instructions).
+    let mut rows = [(0, RawValue::NONE); MAX_MATERIAL_PARAMS];
+    let mut row_count = 0;
+    for p in 0..param_count {
+        let value = match &job.lanes {
+            ExpandLanes::Staged { per_lane, .. } => per_lane[p].then_some(RawValue::NONE),
+            ExpandLanes::Raw { overrides, .. } => overrides[p],
+        };
+        if let Some(value) = value {
+            rows[row_count] = (p, value);
+            row_count += 1;
+        }
+    }
+    let rows = &rows[..row_count];
     for i in (0..len).step_by(L::LANES) {
         let n = L::LANES.min(len - i);
         let (frame, wo) = match &job.lanes {
             ExpandLanes::Staged {
-                params,
-                per_lane,
-                frame,
-                wo,
+                params, frame, wo, ..
             } => {
                 debug_assert!(len.is_multiple_of(L::LANES));
-                for (p, r) in raw[..param_count].iter_mut().enumerate() {
-                    if per_lane[p] {
-                        *r = L::load(&params[p * len + i..]);
-                    }
+                for &(p, _) in rows {
+                    raw[p] = L::load(&params[p * len + i..]);
                 }
                 (load_frame::<L>(frame, len, i), load3::<L>(*wo, i, L::LANES))
             }
             ExpandLanes::Raw {
-                count,
-                overrides,
-                normal,
-                wo,
+                count, normal, wo, ..
             } => {
                 // A register past the caller's lanes (a padded chunk's last on AVX2)
                 // reads none of them: all padding.
                 let (at, n) = (i.min(*count), count.saturating_sub(i).min(L::LANES));
-                for (p, r) in raw[..param_count].iter_mut().enumerate() {
-                    if let Some(o) = overrides[p] {
-                        let v = load::<L>(o.row, at, n, job.material[p]);
-                        // `ParamSpec::in_range`.
-                        in_range = in_range
-                            & v.abs().le(L::splat(f32::MAX))
-                            & v.ge(L::splat(o.min))
-                            & v.le(L::splat(o.max));
-                        *r = v;
-                    }
+                for &(p, o) in rows {
+                    let v = load::<L>(o.row, at, n, job.material[p]);
+                    // `ParamSpec::in_range`.
+                    in_range = in_range
+                        & v.abs().le(L::splat(f32::MAX))
+                        & v.ge(L::splat(o.min))
+                        & v.le(L::splat(o.max));
+                    raw[p] = v;
                 }
                 let (normal, normal_ok) = unit_in_range(load3::<L>(*normal, at, n));
                 let (t, b) = duff_axes(normal);
