@@ -58,13 +58,12 @@ def main():
             new.args.closure = libs[1][1]
             new.ref = ctypes.byref(new.args)
             rates = paired((old, new), n, args.rounds)
-            ratios = sorted(b / a for a, b in zip(*rates))
-            q = len(ratios)
+            median, low, high, ratios = bench.paired_ratios(*rates)
             print(
                 f"{args.case} {op} N={n}: old {statistics.median(rates[0]):.1f}, "
                 f"new {statistics.median(rates[1]):.1f} M lanes/s; new/old median "
-                f"{ratios[q // 2]:.4f} (quartiles {ratios[q // 4]:.4f}, "
-                f"{ratios[3 * q // 4]:.4f}; new faster in {sum(r > 1 for r in ratios)}/{q})"
+                f"{median:.4f} (quartiles {low:.4f}, {high:.4f}; new faster in "
+                f"{sum(r > 1 for r in ratios)}/{len(ratios)})"
             )
     return 0
 

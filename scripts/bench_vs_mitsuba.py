@@ -362,6 +362,14 @@ def rate(n, seconds):
     return n / seconds / 1e6 if seconds else None
 
 
+def paired_ratios(a, b):
+    """Per-round ratios b / a of two paired rate lists: (median, lower quartile, upper
+    quartile, the sorted ratios)."""
+    ratios = sorted(y / x for x, y in zip(a, b))
+    q = len(ratios)
+    return ratios[q // 2], ratios[q // 4], ratios[3 * q // 4], ratios
+
+
 def fmt(v):
     if v is None:
         return "n/a"

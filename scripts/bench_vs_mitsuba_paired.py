@@ -62,13 +62,12 @@ def main():
                 seconds, miss = bench.median_kernel(mits, mcall, inner, args.repeats)
                 rates[1].append(bench.rate(n, seconds))
                 misses += miss
-            ratios = sorted(g / m for g, m in zip(*rates))
-            q = len(ratios)
+            median, low, high, ratios = bench.paired_ratios(rates[1], rates[0])
             print(
                 f"{args.case} {op} N={n}: Glint {statistics.median(rates[0]):.1f}, Mitsuba "
                 f"kernel {statistics.median(rates[1]):.1f} M lanes/s; Glint/Mitsuba median "
-                f"{ratios[q // 2]:.2f} (quartiles {ratios[q // 4]:.2f}, "
-                f"{ratios[3 * q // 4]:.2f}; at least 2 in {sum(r >= 2 for r in ratios)}/{q})"
+                f"{median:.2f} (quartiles {low:.2f}, {high:.2f}; at least 2 in "
+                f"{sum(r >= 2 for r in ratios)}/{len(ratios)})"
                 + (f"; {misses} Mitsuba kernels missed the cache" if misses else ""),
                 flush=True,
             )
