@@ -341,6 +341,22 @@ typedef struct glint_material_eval_batch_args {
    Optional.
    */
   float *pdf_reverse;
+  /*
+   Directions per lane, each lane expanded once for all of them (a scanline
+   host's lights); 0 is taken as 1. `wi_*`, `value_*`, `pdf` and `pdf_reverse`
+   hold `direction_count` blocks of `lanes.count` values: direction `d` of lane
+   `j` at `d * count + j`. Appended: a caller built against a header without it
+   passes its smaller `struct_size` and gets one direction.
+   */
+  size_t direction_count;
+  /*
+   Optional (all three or none): each lane's directional albedo at `wo`, as
+   `glint_material_albedo_batch` gives it, from the same expansion (a scanline
+   host's ambient term). Appended with `direction_count`.
+   */
+  float *albedo_r;
+  float *albedo_g;
+  float *albedo_b;
 } glint_material_eval_batch_args;
 
 /*

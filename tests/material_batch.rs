@@ -807,3 +807,150 @@ fn fused_evals_are_the_slot_by_slot_sums() {
         }
     }
 }
+
+/// An eval at several directions per lane, with the albedo asked in the same call
+/// (`material::eval_directions`, a scanline host's lights and ambient term), gives
+/// each direction what an eval of that direction alone gives and the albedo call's
+/// albedos, to the bit, on every ISA: lanes taken in one pass, an active mask, given
+/// tangents (staged), a lane failing everywhere (NaN normal), a `wi` failing in one
+/// direction only (zero length) and a valid lane outside the raw path's range
+/// (staged). The error names the lowest failing lane and its direction.
+#[test]
+fn several_directions_and_the_albedo_are_each_call_alone() {
+    use glint::params::ParamKind;
+    let registry = Registry::with_builtins();
+    let description = r#"{"material": "disney", "metallic": 0.3, "clearcoat": 0.8,
+        "sheen": 0.6, "anisotropic": 0.5, "subsurface": 0.4}"#;
+    let material = glint::json::material_from_json(&registry, description, 1e-3).unwrap();
+    let index = |name: &str| {
+        let specs = material.kind().params();
+        specs.iter().position(|s| s.name == name).unwrap() as u32
+    };
+    let (n, k) = (613, 3);
+    let mut rng = Rng::new(0xd1ec);
+    let (normal, wo) = normals_and_views(&mut rng, n);
+    let wi: Vec<Vec3<f32>> = (0..n * k).map(|_| sphere(&mut rng)).collect();
+    let tangent = tangents(&mut rng, n, 3);
+    let rough: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
+    let color = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
+    let (mut wo, mut wi, mut normal, tangent) =
+        (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
+    let active: Vec<u8> = (0..n).map(|i| u8::from(i % 5 != 2)).collect();
+    let overrides = [
+        material::OverrideLanes {
+            param: index("roughness"),
+            kind: ParamKind::Float,
+            value: [&rough, &rough, &rough],
+        },
+        material::OverrideLanes {
+            param: index("base_color"),
+            kind: ParamKind::Rgb,
+            value: [&color[0], &color[1], &color[2]],
+        },
+    ];
+    for hostile in [false, true] {
+        if hostile {
+            normal[1][300] = f32::NAN;
+            (wi[0][n + 290], wi[1][n + 290], wi[2][n + 290]) = (0.0, 0.0, 0.0);
+            for row in &mut wo {
+                row[450] *= 1e25;
+            }
+        }
+        for (mask, tangents) in [(false, false), (true, false), (false, true)] {
+            let input = MaterialInput {
+                count: n,
+                material: &material,
+                active: mask.then_some(&active[..]),
+                wo: soa(&wo),
+                normal: soa(&normal),
+                tangent: tangents.then(|| soa(&tangent)),
+                overrides: &overrides,
+            };
+            for kernels in Kernels::available() {
+                let exec = Exec {
+                    kernels,
+                    threads: Threads::Caller,
+                };
+                let fill = |len: usize| [0; 4].map(|_| vec![-7.0f32; len]);
+                let (mut all, mut albedo) = (fill(n * k), fill(n));
+                let [r, g, b, p] = &mut all;
+                let [ar, ag, ab, _] = &mut albedo;
+                let result = material::eval_directions(
+                    &exec,
+                    &input,
+                    soa(&wi),
+                    k,
+                    EvalOutput {
+                        value: Soa3Mut { x: r, y: g, z: b },
+                        pdf: p,
+                        pdf_reverse: None,
+                    },
+                    Some(Soa3Mut {
+                        x: ar,
+                        y: ag,
+                        z: ab,
+                    }),
+                );
+                let error = result.err().map(|e| e.message);
+                let mut errors = Vec::new();
+                for d in 0..k {
+                    let at = d * n..(d + 1) * n;
+                    let wi_d = [0, 1, 2].map(|c| wi[c][at.clone()].to_vec());
+                    let mut one = fill(n);
+                    let [r, g, b, p] = &mut one;
+                    let alone = material::eval(
+                        &exec,
+                        &input,
+                        soa(&wi_d),
+                        EvalOutput {
+                            value: Soa3Mut { x: r, y: g, z: b },
+                            pdf: p,
+                            pdf_reverse: None,
+                        },
+                    );
+                    errors.push(alone.err().map(|e| e.message.to_string()));
+                    for (c, row) in one.iter().enumerate() {
+                        let got = &all[c][at.clone()];
+                        for j in 0..n {
+                            assert_eq!(
+                                got[j].to_bits(),
+                                row[j].to_bits(),
+                                "{kernels:?} mask {mask} tangents {tangents} hostile \
+                                 {hostile}: lane {j} direction {d} output {c}"
+                            );
+                        }
+                    }
+                }
+                let mut one = fill(n);
+                let [r, g, b, _] = &mut one;
+                let albedo_alone = material::albedo(&exec, &input, Soa3Mut { x: r, y: g, z: b });
+                for c in 0..3 {
+                    for j in 0..n {
+                        assert_eq!(
+                            albedo[c][j].to_bits(),
+                            one[c][j].to_bits(),
+                            "{kernels:?} mask {mask} tangents {tangents}: albedo of lane {j}"
+                        );
+                    }
+                }
+                if !hostile {
+                    assert_eq!(error, None);
+                    assert!(albedo_alone.is_ok());
+                    continue;
+                }
+                // Lane 290's `wi` fails in direction 1 only, before lane 300's normal.
+                let errors: Vec<String> = errors.into_iter().map(Option::unwrap).collect();
+                assert!(errors[0].starts_with("lane 300: normal"), "{}", errors[0]);
+                assert!(errors[1].starts_with("lane 290: wi"), "{}", errors[1]);
+                assert_eq!(errors[2], errors[0]);
+                let named = format!("direction 1, {}", errors[1]);
+                assert_eq!(error.as_deref(), Some(named.as_str()));
+                let albedo_error = albedo_alone.unwrap_err().message;
+                assert!(
+                    albedo_error.starts_with("lane 300: normal"),
+                    "{albedo_error}"
+                );
+            }
+        }
+    }
+}

@@ -227,6 +227,13 @@ fn stage_chunk(
         any |= stage_directions(kernels, e.wi, "wi", lanes, len, &mut s.wi, failed, errors);
     }
     s.any_failed = any;
+    let mut eval = eval.filter(|e| e.in_pass).map(|e| {
+        [ExpandEval {
+            wi: view3(&s.wi, len),
+            value: e.want_value.then(|| rows3(&mut s.value, len)),
+            pdf: grow(&mut s.pdf, len),
+        }]
+    });
     let mut job = ExpandJob {
         len,
         lanes: ExpandLanes::Staged {
@@ -244,11 +251,7 @@ fn stage_chunk(
         kept: [false; MAX_SLOTS],
         sample: None,
         albedo: None,
-        eval: eval.filter(|e| e.in_pass).map(|e| ExpandEval {
-            wi: view3(&s.wi, len),
-            value: e.want_value.then(|| rows3(&mut s.value, len)),
-            pdf: grow(&mut s.pdf, len),
-        }),
+        evals: eval.as_mut().map_or(&mut [], |e| &mut e[..]),
         staged: None,
         out_of_range: false,
     };
@@ -602,22 +605,86 @@ pub fn eval(
     wi: Soa3<'_>,
     out: EvalOutput<'_>,
 ) -> Result<(), Error> {
+    eval_directions(exec, input, wi, 1, out, None)
+}
+
+/// [`eval`] at `directions` directions per lane, each lane expanded once for all of
+/// them (a scanline host's lights): `wi`'s and `out`'s rows hold `directions` blocks of
+/// `count` values, direction `d` of lane `j` at `d * count + j`. With `albedo`, the
+/// lanes' albedos ([`albedo`]) from the same expansion. Each lane and direction gets
+/// what [`eval`] of that direction alone gives, to the bit; a lane with bad input
+/// (its `wo`, normal or overrides) gets zeros in every direction, a bad `wi` in its
+/// direction only. The error reported is the lowest failing lane's, in the first
+/// direction it fails, named when there are several.
+pub fn eval_directions(
+    exec: &Exec<'_>,
+    input: &MaterialInput<'_>,
+    wi: Soa3<'_>,
+    directions: usize,
+    out: EvalOutput<'_>,
+    albedo: Option<Soa3Mut<'_>>,
+) -> Result<(), Error> {
     let n = input.count;
     input.check()?;
-    wi.check(n, "wi")?;
-    out.value.check(n, "value")?;
-    check_len(out.pdf.len(), n, "pdf")?;
+    let rows = direction_rows(directions, n)?;
+    wi.check(rows, "wi")?;
+    out.value.check(rows, "value")?;
+    check_len(out.pdf.len(), rows, "pdf")?;
     if let Some(rev) = &out.pdf_reverse {
-        check_len(rev.len(), n, "pdf_reverse")?;
+        check_len(rev.len(), rows, "pdf_reverse")?;
+    }
+    if let Some(a) = &albedo {
+        a.check(n, "albedo")?;
+    }
+    if n == 0 {
+        return Ok(());
+    }
+    let mut outputs = Vec::new();
+    super::stage::reserve(&mut outputs, directions)?;
+    let EvalOutput {
+        value,
+        pdf,
+        pdf_reverse,
+    } = out;
+    let mut rev = pdf_reverse.map(|r| r[..rows].chunks_exact_mut(n));
+    for (((x, y), z), pdf) in value.x[..rows]
+        .chunks_exact_mut(n)
+        .zip(value.y[..rows].chunks_exact_mut(n))
+        .zip(value.z[..rows].chunks_exact_mut(n))
+        .zip(pdf[..rows].chunks_exact_mut(n))
+    {
+        outputs.push(DirectionOutput {
+            value: Some(Soa3Mut { x, y, z }),
+            pdf,
+            pdf_reverse: rev.as_mut().and_then(Iterator::next),
+        });
     }
     let out = MaterialEvalOutput {
-        value: Some(out.value),
-        pdf: out.pdf,
-        pdf_reverse: out.pdf_reverse,
+        directions: outputs,
+        albedo,
     };
     run_blocks(exec, n, out, |start, mut out| {
         eval_block(exec.kernels, input, wi, start, &mut out)
     })
+}
+
+/// The rows of `directions` directions of `count` lanes: an error unless `directions`
+/// is at least 1 and the product a batch's count ([`check_count`]).
+pub fn direction_rows(directions: usize, count: usize) -> Result<usize, Error> {
+    if directions == 0 {
+        return Err(Error::new(
+            Status::OutOfRange,
+            "directions = 0: an eval takes at least one direction per lane",
+        ));
+    }
+    let rows = directions.checked_mul(count).ok_or_else(|| {
+        Error::new(
+            Status::OutOfRange,
+            format!("{directions} directions of {count} lanes overflow"),
+        )
+    })?;
+    check_count(rows)?;
+    Ok(rows)
 }
 
 /// `pdf` of the material at every active lane.
@@ -630,39 +697,95 @@ pub fn pdf(
     input.check()?;
     wi.check(input.count, "wi")?;
     check_len(out.len(), input.count, "pdf")?;
-    let out = MaterialEvalOutput {
+    let mut directions = Vec::new();
+    super::stage::reserve(&mut directions, 1)?;
+    directions.push(DirectionOutput {
         value: None,
         pdf: out,
         pdf_reverse: None,
+    });
+    let out = MaterialEvalOutput {
+        directions,
+        albedo: None,
     };
     run_blocks(exec, input.count, out, |start, mut out| {
         eval_block(exec.kernels, input, wi, start, &mut out)
     })
 }
 
-struct MaterialEvalOutput<'o> {
+/// One direction's outputs of an eval.
+struct DirectionOutput<'o> {
     value: Option<Soa3Mut<'o>>,
     pdf: &'o mut [f32],
     pdf_reverse: Option<&'o mut [f32]>,
 }
 
-impl SplitLanes for MaterialEvalOutput<'_> {
+impl SplitLanes for DirectionOutput<'_> {
     fn split_lanes(self, lanes: usize) -> (Self, Self) {
         let (value, value2) = self.value.split_lanes(lanes);
         let (pdf, pdf2) = self.pdf.split_lanes(lanes);
         let (rev, rev2) = self.pdf_reverse.split_lanes(lanes);
         (
-            MaterialEvalOutput {
+            DirectionOutput {
                 value,
                 pdf,
                 pdf_reverse: rev,
             },
-            MaterialEvalOutput {
+            DirectionOutput {
                 value: value2,
                 pdf: pdf2,
                 pdf_reverse: rev2,
             },
         )
+    }
+}
+
+/// An eval's outputs: each direction's, and the albedos asked with them.
+struct MaterialEvalOutput<'o> {
+    directions: Vec<DirectionOutput<'o>>,
+    albedo: Option<Soa3Mut<'o>>,
+}
+
+impl SplitLanes for MaterialEvalOutput<'_> {
+    fn split_lanes(self, lanes: usize) -> (Self, Self) {
+        // The upper halves' list: a few words a direction, against the caller's rows
+        // of at least 16 bytes per lane and direction.
+        let mut high = Vec::with_capacity(self.directions.len());
+        let mut low = self.directions;
+        for d in &mut low {
+            let taken = std::mem::replace(
+                d,
+                DirectionOutput {
+                    value: None,
+                    pdf: &mut [],
+                    pdf_reverse: None,
+                },
+            );
+            let (l, h) = taken.split_lanes(lanes);
+            *d = l;
+            high.push(h);
+        }
+        let (albedo, albedo2) = self.albedo.split_lanes(lanes);
+        (
+            MaterialEvalOutput {
+                directions: low,
+                albedo,
+            },
+            MaterialEvalOutput {
+                directions: high,
+                albedo: albedo2,
+            },
+        )
+    }
+}
+
+/// Direction `d`'s rows of `wi` (`count` lanes a direction).
+fn direction(wi: Soa3<'_>, d: usize, count: usize) -> Soa3<'_> {
+    let rows = d * count..(d + 1) * count;
+    Soa3 {
+        x: &wi.x[rows.clone()],
+        y: &wi.y[rows.clone()],
+        z: &wi.z[rows],
     }
 }
 
@@ -675,45 +798,90 @@ fn eval_block(
 ) -> Result<(), Error> {
     let end = (start + super::BLOCK).min(input.count);
     // The reverse pdf is taken slot by slot, over the slots' rows.
-    let in_pass = out.pdf_reverse.is_none();
+    let in_pass = out.directions.iter().all(|d| d.pdf_reverse.is_none());
     // Every lane active: the block in one expansion (per chunk, its setup took 4% of a
     // Disney material's eval); when some lane needs staging, the chunks below redo
     // the block.
-    if in_pass && input.active.is_none() && eval_raw(kernels, input, wi, start..end, start, out) {
+    if in_pass && input.active.is_none() && eval_raw(kernels, input, wi, start..end, start, out)? {
         return Ok(());
     }
-    let mut failure = LaneError::default();
+    let mut failures = Vec::new();
+    super::stage::reserve(&mut failures, out.directions.len())?;
+    failures.resize_with(out.directions.len(), LaneError::default);
+    let mut albedo_failure = LaneError::default();
     with_scratch(|s| {
         for_chunks(input, start..end, s, |lanes, s| {
-            let len = padded(lanes.len());
-            let eval = StageEval {
-                wi,
-                want_value: out.value.is_some(),
-                in_pass,
-            };
             if in_pass
                 && let Some(range) = consecutive(lanes)
-                && eval_raw(kernels, input, wi, range, start, out)
+                && eval_raw(kernels, input, wi, range, start, out)?
             {
                 return Ok(());
             }
-            stage_chunk(kernels, input, lanes, len, s, &mut failure, Some(eval))?;
-            if !eval.in_pass {
-                eval_chunk(kernels, input.material, len, s, eval.want_value);
+            // Staged direction by direction: each as an eval of its direction alone.
+            for (d, (o, failure)) in out.directions.iter_mut().zip(&mut failures).enumerate() {
+                let wi = direction(wi, d, input.count);
+                eval_staged(kernels, input, wi, lanes, start, s, failure, o)?;
             }
-            if let Some(v) = out.value.as_mut() {
-                for (staged, out) in s.value.iter().zip([&mut *v.x, &mut *v.y, &mut *v.z]) {
-                    scatter(lanes, start, &s.failed, staged, out);
-                }
-            }
-            scatter(lanes, start, &s.failed, &s.pdf, out.pdf);
-            if let Some(rev) = out.pdf_reverse.as_deref_mut() {
-                scatter(lanes, start, &s.failed, &s.pdf_reverse, rev);
+            if let Some(a) = out.albedo.as_mut() {
+                albedo_chunk(kernels, input, lanes, start, s, &mut albedo_failure, a)?;
             }
             Ok(())
         })
     })?;
-    failure.take().map_or(Ok(()), Err)
+    let named = failures.len() > 1;
+    let first = failures
+        .iter_mut()
+        .enumerate()
+        .filter_map(|(d, f)| f.lane().map(|lane| (lane, d)))
+        .min();
+    match first {
+        Some((_, d)) => {
+            let e = failures[d]
+                .take()
+                .expect("a failing direction has an error");
+            Err(if named {
+                Error::new(e.status, format!("direction {d}, {}", e.message))
+            } else {
+                e
+            })
+        }
+        None => albedo_failure.take().map_or(Ok(()), Err),
+    }
+}
+
+/// One direction of a chunk's eval, staged: `wi` staged with the lanes, the value and
+/// pdf finished in the staging pass or slot by slot (with the reverse pdf).
+#[allow(clippy::too_many_arguments)]
+fn eval_staged(
+    kernels: Kernels,
+    input: &MaterialInput<'_>,
+    wi: Soa3<'_>,
+    lanes: &[u32],
+    start: usize,
+    s: &mut Scratch,
+    failure: &mut LaneError,
+    out: &mut DirectionOutput<'_>,
+) -> Result<(), Error> {
+    let len = padded(lanes.len());
+    let eval = StageEval {
+        wi,
+        want_value: out.value.is_some(),
+        in_pass: out.pdf_reverse.is_none(),
+    };
+    stage_chunk(kernels, input, lanes, len, s, failure, Some(eval))?;
+    if !eval.in_pass {
+        eval_chunk(kernels, input.material, len, s, eval.want_value);
+    }
+    if let Some(v) = out.value.as_mut() {
+        for (staged, out) in s.value.iter().zip([&mut *v.x, &mut *v.y, &mut *v.z]) {
+            scatter(lanes, start, &s.failed, staged, out);
+        }
+    }
+    scatter(lanes, start, &s.failed, &s.pdf, out.pdf);
+    if let Some(rev) = out.pdf_reverse.as_deref_mut() {
+        scatter(lanes, start, &s.failed, &s.pdf_reverse, rev);
+    }
+    Ok(())
 }
 
 /// The caller's lanes of a chunk of consecutive lanes, and each overridden value's
@@ -778,10 +946,11 @@ fn raw_expand_lanes<'a>(
 }
 
 /// The in-pass eval of a chunk of consecutive lanes from the caller's arrays straight
-/// into the outputs ([`ExpandLanes::Raw`]): no copies, no rows. False, and the outputs
-/// of the chunk not valid, when it cannot be taken so ([`raw_lanes`]) or some lane's
-/// input is outside what the raw path takes; the chunk is then staged, which writes
-/// every lane and reports each lane's error.
+/// into the outputs ([`ExpandLanes::Raw`]), every direction (and the albedo when asked)
+/// from one expansion: no copies, no rows. False, and the outputs of the chunk not
+/// valid, when it cannot be taken so ([`raw_lanes`]) or some lane's input is outside
+/// what the raw path takes; the chunk is then staged, which writes every lane and
+/// reports each lane's error.
 fn eval_raw(
     kernels: Kernels,
     input: &MaterialInput<'_>,
@@ -789,34 +958,43 @@ fn eval_raw(
     lanes: Range<usize>,
     start: usize,
     out: &mut MaterialEvalOutput<'_>,
-) -> bool {
+) -> Result<bool, Error> {
     let material = input.material;
     let mut overrides = [None; MAX_MATERIAL_PARAMS];
     let overrides = &mut overrides[..material.params().len()];
     let Some(lanes) = raw_range(input, lanes, overrides) else {
-        return false;
+        return Ok(false);
     };
     let at = lanes.start - start..lanes.end - start;
-    let value = out.value.as_mut().map(|v| {
-        [
-            &mut v.x[at.clone()],
-            &mut v.y[at.clone()],
-            &mut v.z[at.clone()],
-        ]
-    });
-    let eval = ExpandEval {
-        wi: caller_rows(wi, &lanes),
-        value,
-        pdf: &mut out.pdf[at],
-    };
-    let mut job = raw_pass_job(input, &lanes, overrides, (Some(eval), None, None));
+    let mut evals = Vec::new();
+    super::stage::reserve(&mut evals, out.directions.len())?;
+    for (d, o) in out.directions.iter_mut().enumerate() {
+        let value = o.value.as_mut().map(|v| {
+            [
+                &mut v.x[at.clone()],
+                &mut v.y[at.clone()],
+                &mut v.z[at.clone()],
+            ]
+        });
+        evals.push(ExpandEval {
+            wi: caller_rows(direction(wi, d, input.count), &lanes),
+            value,
+            pdf: &mut o.pdf[at.clone()],
+        });
+    }
+    let albedo = out
+        .albedo
+        .as_mut()
+        .map(|a| [&mut *a.x, &mut *a.y, &mut *a.z].map(|row| &mut row[at.clone()]));
+    let mut job = raw_pass_job(input, &lanes, overrides, (&mut evals, None, albedo));
     material.kind().expand_lanes(kernels, &mut job);
-    !job.out_of_range
+    Ok(!job.out_of_range)
 }
 
-/// What an expansion finishes in its pass: an eval, a sample or an albedo.
+/// What an expansion finishes in its pass: evals (and an albedo with them or alone)
+/// or a sample.
 type InPass<'a> = (
-    Option<ExpandEval<'a>>,
+    &'a mut [ExpandEval<'a>],
     Option<ExpandSample<'a>>,
     Option<[&'a mut [f32]; 3]>,
 );
@@ -827,7 +1005,7 @@ fn raw_pass_job<'a>(
     input: &MaterialInput<'a>,
     lanes: &Range<usize>,
     overrides: &'a [Option<RawValue<'a>>],
-    (eval, sample, albedo): InPass<'a>,
+    (evals, sample, albedo): InPass<'a>,
 ) -> ExpandJob<'a> {
     let material = input.material;
     ExpandJob {
@@ -840,7 +1018,7 @@ fn raw_pass_job<'a>(
         weight: &mut [],
         probability: &mut [],
         kept: [false; MAX_SLOTS],
-        eval,
+        evals,
         sample,
         albedo,
         staged: None,
@@ -884,7 +1062,7 @@ fn stage_raw(
         kept: [false; MAX_SLOTS],
         sample: None,
         albedo: None,
-        eval: None,
+        evals: &mut [],
         staged: Some(StagedRows {
             frame: grow(&mut rows.frame, 9 * len),
             wo: rows3(&mut s.wo, len),
@@ -978,7 +1156,7 @@ fn albedo_raw(
     };
     let at = lanes.start - start..lanes.end - start;
     let rows = [&mut *out.x, &mut *out.y, &mut *out.z].map(|row| &mut row[at.clone()]);
-    let mut job = raw_pass_job(input, &lanes, overrides, (None, None, Some(rows)));
+    let mut job = raw_pass_job(input, &lanes, overrides, (&mut [], None, Some(rows)));
     input.material.kind().expand_lanes(kernels, &mut job);
     !job.out_of_range
 }
@@ -1059,7 +1237,7 @@ fn sample_raw(
         u: [u.u_lobe, u.u0, u.u1].map(|row| &row[lanes.clone()]),
         out: out.finish_rows(&local),
     };
-    let mut job = raw_pass_job(input, &lanes, overrides, (None, Some(sample), None));
+    let mut job = raw_pass_job(input, &lanes, overrides, (&mut [], Some(sample), None));
     material.kind().expand_lanes(kernels, &mut job);
     !job.out_of_range
 }

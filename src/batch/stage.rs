@@ -55,6 +55,11 @@ impl LaneError {
         }
     }
 
+    /// The failing lane kept, if any.
+    pub fn lane(&self) -> Option<usize> {
+        self.0.as_ref().map(|&(lane, _)| lane)
+    }
+
     /// The error, prefixed with its lane's index.
     pub fn take(&mut self) -> Option<Error> {
         self.0

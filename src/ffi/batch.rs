@@ -126,6 +126,9 @@ const SAMPLE_ARGS_V1_SIZE: usize = std::mem::offset_of!(glint_sample_batch_args,
 /// The same for `glint_material_sample_batch_args`.
 const MATERIAL_SAMPLE_ARGS_V1_SIZE: usize =
     std::mem::offset_of!(glint_material_sample_batch_args, component);
+/// The same for `glint_material_eval_batch_args` before `direction_count`.
+const MATERIAL_EVAL_ARGS_V1_SIZE: usize =
+    std::mem::offset_of!(glint_material_eval_batch_args, direction_count);
 
 /// The fields every batch argument struct shares.
 struct CommonArgs {
@@ -532,6 +535,18 @@ pub struct glint_material_eval_batch_args {
     pub pdf: *mut f32,
     /// Optional.
     pub pdf_reverse: *mut f32,
+    /// Directions per lane, each lane expanded once for all of them (a scanline
+    /// host's lights); 0 is taken as 1. `wi_*`, `value_*`, `pdf` and `pdf_reverse`
+    /// hold `direction_count` blocks of `lanes.count` values: direction `d` of lane
+    /// `j` at `d * count + j`. Appended: a caller built against a header without it
+    /// passes its smaller `struct_size` and gets one direction.
+    pub direction_count: usize,
+    /// Optional (all three or none): each lane's directional albedo at `wo`, as
+    /// `glint_material_albedo_batch` gives it, from the same expansion (a scanline
+    /// host's ambient term). Appended with `direction_count`.
+    pub albedo_r: *mut f32,
+    pub albedo_g: *mut f32,
+    pub albedo_b: *mut f32,
 }
 
 /// Arguments of `glint_material_pdf_batch`.
@@ -671,21 +686,30 @@ pub unsafe extern "C" fn glint_material_eval_batch(
     args: *const glint_material_eval_batch_args,
 ) -> glint_status {
     guard(|| {
-        // SAFETY: per the contract.
-        let a = unsafe { deref(args, "args") }?;
-        check_size(a, "args")?;
+        // SAFETY: per the contract; the struct holds integers and raw pointers only.
+        let a = &unsafe { args_versioned(args, MATERIAL_EVAL_ARGS_V1_SIZE, "args") }?;
         let n = a.lanes.count;
         let mut overrides = Vec::new();
-        // SAFETY: the struct's pointers are valid for `count` elements per the contract.
+        // SAFETY: the struct's pointers are valid for `count` elements (`direction_count`
+        // blocks of them for the directions' rows) per the contract.
         unsafe {
             let (input, exec) = material_lanes(&a.lanes, &mut overrides)?;
-            let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, n, "wi")?;
+            let directions = a.direction_count.max(1);
+            let rows = batch::material::direction_rows(directions, n)?;
+            let wi = soa_in(a.wi_x, a.wi_y, a.wi_z, rows, "wi")?;
             let out = EvalOutput {
-                value: soa_out(a.value_r, a.value_g, a.value_b, n, "value")?,
-                pdf: output(a.pdf, n, "pdf")?,
-                pdf_reverse: optional(a.pdf_reverse, n),
+                value: soa_out(a.value_r, a.value_g, a.value_b, rows, "value")?,
+                pdf: output(a.pdf, rows, "pdf")?,
+                pdf_reverse: optional(a.pdf_reverse, rows),
             };
-            batch::material::eval(&exec, &input, wi, out)
+            let albedo = [a.albedo_r, a.albedo_g, a.albedo_b]
+                .iter()
+                .any(|p| !p.is_null());
+            let albedo = match albedo {
+                true => Some(soa_out(a.albedo_r, a.albedo_g, a.albedo_b, n, "albedo")?),
+                false => None,
+            };
+            batch::material::eval_directions(&exec, &input, wi, directions, out, albedo)
         }
     })
 }

@@ -39,7 +39,8 @@ pub struct ExpandJob<'a> {
     /// block is one of them copy it instead of decoding.
     pub known: &'a [Option<DecodedBlock>],
     /// Slot `k`'s decoded block, value `p` of lane `j` at `(k MAX_DECODED_LEN + p) len + j`.
-    /// These rows, `weight` and `probability` are not written when `eval` is given.
+    /// These rows, `weight` and `probability` are not written when `evals`, `sample`
+    /// or `albedo` is given.
     pub decoded: &'a mut [f32],
     /// Slot `k`'s weight, channel `c` of lane `j` at `(3 k + c) len + j`; zero where
     /// the slot is dropped.
@@ -48,16 +49,18 @@ pub struct ExpandJob<'a> {
     pub probability: &'a mut [f32],
     /// Out: slots with a nonzero probability on some lane.
     pub kept: [bool; MAX_SLOTS],
-    /// The material's eval at each lane's `wi`, in the same pass.
-    pub eval: Option<ExpandEval<'a>>,
+    /// The material's eval at each lane's `wi`, in the same pass: one entry per
+    /// direction, every direction of a lane from its one expansion (a scanline host's
+    /// lights). Empty: no eval.
+    pub evals: &'a mut [ExpandEval<'a>],
     /// With [`ExpandLanes::Raw`] and slots that are a fused shape: each lane's sample,
     /// in the same pass.
     pub sample: Option<ExpandSample<'a>>,
     /// The material's directional albedo, `sum_k weight_k albedo_k(wo)` over the kept
     /// slots in slot order (what the staged path sums from the slots' albedo rows),
-    /// into these rows in the same pass.
+    /// into these rows in the same pass (with `evals` or alone).
     pub albedo: Option<[&'a mut [f32]; 3]>,
-    /// With [`ExpandLanes::Raw`] and no `eval`: rows the samplers read, written in the
+    /// With [`ExpandLanes::Raw`] and no `evals`: rows the samplers read, written in the
     /// same pass as the staged path writes them.
     pub staged: Option<StagedRows<'a>>,
     /// Out, with [`ExpandLanes::Raw`]: some lane's input is not one the staged path
@@ -494,7 +497,7 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             every_emitted &= emitted.any();
         }
         let alone = weighted.le(L::one()).all();
-        let in_pass = job.eval.is_some() || job.sample.is_some() || job.albedo.is_some();
+        let in_pass = !job.evals.is_empty() || job.sample.is_some() || job.albedo.is_some();
         let rows = (!in_pass).then_some(&mut *job.decoded);
         macro_rules! slots {
             ($by_slot:literal) => {
@@ -533,7 +536,9 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             for (v, row) in sums.sum.to_array().into_iter().zip(rows.iter_mut()) {
                 store(v, row, i, n);
             }
-            continue;
+            if job.evals.is_empty() {
+                continue;
+            }
         }
         if let Some(sample) = job.sample.as_mut() {
             let u_lobe = load::<L>(sample.u[0], i, n, 0.5);
@@ -562,7 +567,7 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
             }
             continue;
         }
-        let Some(eval) = job.eval.as_mut() else {
+        if job.evals.is_empty() {
             for k in 0..count {
                 probability[k].store(&mut job.probability[k * len + i..]);
                 for (c, v) in weight[k].to_array().into_iter().enumerate() {
@@ -570,34 +575,36 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 }
             }
             continue;
-        };
-        let wi = load3::<L>(eval.wi, i, n);
-        let wi = match job.lanes {
-            ExpandLanes::Staged { .. } => wi,
-            ExpandLanes::Raw { .. } => {
-                let (wi, ok) = unit_in_range(wi);
-                in_range = in_range & ok;
-                wi
-            }
-        };
-        let wi = frame.to_local(wi);
+        }
         let mut every_kept = true;
         for p in &probability[..count] {
             every_kept &= p.gt(L::zero()).any();
         }
         let terms = (&decoded, &weight, &probability);
-        let sum = if every_kept {
-            eval_sums::<M, L, false>(terms, ctx.wo, wi)
-        } else {
-            eval_sums::<M, L, true>(terms, ctx.wo, wi)
-        };
-        let (value, pdf) = sum.unwrap_or((Rgb::zero(), L::zero()));
-        if let Some(rows) = eval.value.as_mut() {
-            for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
-                store(v, row, i, n);
+        for eval in job.evals.iter_mut() {
+            let wi = load3::<L>(eval.wi, i, n);
+            let wi = match job.lanes {
+                ExpandLanes::Staged { .. } => wi,
+                ExpandLanes::Raw { .. } => {
+                    let (wi, ok) = unit_in_range(wi);
+                    in_range = in_range & ok;
+                    wi
+                }
+            };
+            let wi = frame.to_local(wi);
+            let sum = if every_kept {
+                eval_sums::<M, L, false>(terms, ctx.wo, wi)
+            } else {
+                eval_sums::<M, L, true>(terms, ctx.wo, wi)
+            };
+            let (value, pdf) = sum.unwrap_or((Rgb::zero(), L::zero()));
+            if let Some(rows) = eval.value.as_mut() {
+                for (v, row) in value.to_array().into_iter().zip(rows.iter_mut()) {
+                    store(v, row, i, n);
+                }
             }
+            store(pdf, eval.pdf, i, n);
         }
-        store(pdf, eval.pdf, i, n);
     }
     job.out_of_range = !in_range.all();
 }
