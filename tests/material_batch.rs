@@ -954,3 +954,87 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
         }
     }
 }
+
+/// A value overridden twice is checked in both overrides, whichever path takes the
+/// lanes: an out-of-range or NaN first override fails its lanes even where the second
+/// is valid (the raw path keeps one row per value, so such lanes are staged).
+#[test]
+fn a_value_overridden_twice_checks_both_overrides() {
+    use glint::params::ParamKind;
+    let registry = Registry::with_builtins();
+    let material = glint::json::material_from_json(&registry, r#"{"material": "disney"}"#, 1e-3)
+        .unwrap();
+    let n = 37;
+    let mut rng = Rng::new(0xd0b1);
+    let (normal, wo) = normals_and_views(&mut rng, n);
+    let wi: Vec<Vec3<f32>> = (0..n).map(|_| sphere(&mut rng)).collect();
+    let (wo, wi, normal) = (rows(&wo), rows(&wi), rows(&normal));
+    let valid = vec![0.5f32; n];
+    for bad in [1.5, f32::NAN] {
+        let mut first = vec![0.25f32; n];
+        first[11] = bad;
+        let overrides = [&first, &valid].map(|row| material::OverrideLanes {
+            param: 5,
+            kind: ParamKind::Float,
+            value: [row, row, row],
+        });
+        let input = MaterialInput {
+            count: n,
+            material: &material,
+            active: None,
+            wo: soa(&wo),
+            normal: soa(&normal),
+            tangent: None,
+            overrides: &overrides,
+        };
+        for kernels in Kernels::available() {
+            let exec = Exec {
+                kernels,
+                threads: Threads::Caller,
+            };
+            let mut out = [0; 4].map(|_| vec![-1.0f32; n]);
+            let [r, g, b, p] = &mut out;
+            let result = material::eval(
+                &exec,
+                &input,
+                soa(&wi),
+                EvalOutput {
+                    value: Soa3Mut { x: r, y: g, z: b },
+                    pdf: p,
+                    pdf_reverse: None,
+                },
+            );
+            let error = result.expect_err("lane 11's first override is out of range");
+            assert!(
+                error.message.starts_with("lane 11: overrides[0]"),
+                "{kernels:?}: {}",
+                error.message
+            );
+            for (j, v) in out.iter().map(|row| row[11]).enumerate() {
+                assert_eq!(v, 0.0, "{kernels:?}: output {j} of the failed lane");
+            }
+            // The other lanes take the second override's value, as a closure does.
+            let second = MaterialInput {
+                overrides: &overrides[1..],
+                ..input
+            };
+            let mut want = [0; 4].map(|_| vec![-1.0f32; n]);
+            let [r, g, b, p] = &mut want;
+            let output = EvalOutput {
+                value: Soa3Mut { x: r, y: g, z: b },
+                pdf: p,
+                pdf_reverse: None,
+            };
+            material::eval(&exec, &second, soa(&wi), output).unwrap();
+            for (got, want) in out.iter().zip(&want) {
+                for j in (0..n).filter(|&j| j != 11) {
+                    assert_eq!(got[j].to_bits(), want[j].to_bits(), "{kernels:?}: lane {j}");
+                }
+            }
+            let [r, g, b, _] = &mut out;
+            let albedo = material::albedo(&exec, &input, Soa3Mut { x: r, y: g, z: b });
+            let message = albedo.expect_err("the albedo checks it too").message;
+            assert!(message.starts_with("lane 11: overrides[0]"), "{message}");
+        }
+    }
+}

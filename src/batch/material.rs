@@ -886,8 +886,8 @@ fn eval_staged(
 
 /// The caller's lanes of a chunk of consecutive lanes, and each overridden value's
 /// row in `overrides`, when the chunk can be taken from the caller's arrays as they
-/// are ([`ExpandLanes::Raw`]): not with tangents (their frames are built lane by lane)
-/// or enum overrides (checked lane by lane).
+/// are ([`ExpandLanes::Raw`]): not with tangents (their frames are built lane by lane),
+/// enum overrides (checked lane by lane) or a value overridden twice.
 fn raw_lanes<'a>(
     input: &MaterialInput<'a>,
     lanes: &[u32],
@@ -916,6 +916,11 @@ fn raw_range<'a>(
         let spec = &specs[o.param as usize];
         let at = params::offset_of(specs, o.param as usize);
         for (c, value) in overrides[at..at + o.kind.size()].iter_mut().enumerate() {
+            // A value overridden twice: the staged path checks each override's range
+            // (the last one's value is the lane's); a row here holds one range.
+            if value.is_some() {
+                return None;
+            }
             *value = Some(RawValue {
                 row: &o.value[c][lanes.clone()],
                 min: spec.min,
