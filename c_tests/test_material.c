@@ -566,6 +566,93 @@ static void batch_errors(void **state)
     glint_material_destroy(m);
 }
 
+/* One eval call at three directions per lane with the albedo (a scanline host's lights
+ * and ambient term): each direction's rows equal a one-direction call's, the albedo the
+ * albedo call's, bit for bit; inactive lanes untouched. A caller passing the struct's
+ * first size gets one direction; a bad direction count or a partial albedo is an error. */
+static void several_directions_in_one_call(void **state)
+{
+    enum { K = 3 };
+    fixture *fx = *state;
+    glint_material *m = paint(fx);
+    lanes_data *d = calloc(1, sizeof *d);
+    float *wi = calloc(3 * K * N, sizeof *wi), *all = calloc(4 * K * N, sizeof *all);
+    float one[4][N], albedo[3][N], albedo_alone[3][N];
+    glint_material_lanes l;
+    glint_material_eval_batch_args e, single;
+    glint_material_albedo_batch_args a;
+    int i, c, dir;
+    assert_non_null(d);
+    assert_non_null(wi);
+    assert_non_null(all);
+    lanes_init(fx, d, &l, m);
+    for (dir = 0; dir < K; dir++)
+        for (i = 0; i < N; i++)
+            for (c = 0; c < 3; c++) /* rotated and mirrored copies of the lanes' wi */
+                wi[(c * K + dir) * N + i] = (dir == 2 ? -1.0f : 1.0f) * d->wi[(c + dir) % 3][i];
+    fill_floats(all, 4 * K * N, -1.0f);
+    fill_floats(albedo[0], 3 * N, -1.0f);
+    memset(&e, 0, sizeof e);
+    e.struct_size = sizeof e;
+    e.lanes = l;
+    e.wi_x = wi, e.wi_y = wi + K * N, e.wi_z = wi + 2 * K * N;
+    e.value_r = all, e.value_g = all + K * N, e.value_b = all + 2 * K * N;
+    e.pdf = all + 3 * K * N;
+    e.direction_count = K;
+    e.albedo_r = albedo[0], e.albedo_g = albedo[1], e.albedo_b = albedo[2];
+    assert_ok(glint_material_eval_batch(&e));
+    for (dir = 0; dir < K; dir++) {
+        memset(&single, 0, sizeof single);
+        single.struct_size = sizeof single;
+        single.lanes = l;
+        single.wi_x = wi + dir * N, single.wi_y = wi + (K + dir) * N;
+        single.wi_z = wi + (2 * K + dir) * N;
+        single.value_r = one[0], single.value_g = one[1], single.value_b = one[2];
+        single.pdf = one[3];
+        fill_floats(one[0], 4 * N, -1.0f);
+        assert_ok(glint_material_eval_batch(&single));
+        for (c = 0; c < 4; c++)
+            assert_memory_equal(all + (c * K + dir) * N, one[c], N * sizeof(float));
+    }
+    memset(&a, 0, sizeof a);
+    a.struct_size = sizeof a;
+    a.lanes = l;
+    a.albedo_r = albedo_alone[0], a.albedo_g = albedo_alone[1], a.albedo_b = albedo_alone[2];
+    fill_floats(albedo_alone[0], 3 * N, -1.0f);
+    assert_ok(glint_material_albedo_batch(&a));
+    assert_memory_equal(albedo, albedo_alone, sizeof albedo);
+    assert_true(all[3 * K * N + N + 3] == -1.0f && albedo[1][3] == -1.0f /* inactive */);
+
+    /* The first version's size: direction_count and albedo are not read. */
+    fill_floats(all, 4 * K * N, -1.0f);
+    e.struct_size = (uint32_t)offsetof(glint_material_eval_batch_args, direction_count);
+    assert_ok(glint_material_eval_batch(&e));
+    assert_true(all[3 * K * N] >= 0.0f && all[3 * K * N + N] == -1.0f);
+    e.struct_size = (uint32_t)offsetof(glint_material_eval_batch_args, albedo_g);
+    check_error(fx, glint_material_eval_batch(&e), GLINT_ERROR_STRUCT_SIZE);
+    e.struct_size = sizeof e;
+
+    e.direction_count = SIZE_MAX;
+    check_error(fx, glint_material_eval_batch(&e), GLINT_ERROR_OUT_OF_RANGE);
+    assert_error_mentions("directions");
+    e.direction_count = K;
+    e.albedo_g = NULL;
+    check_error(fx, glint_material_eval_batch(&e), GLINT_ERROR_NULL_POINTER);
+    assert_error_mentions("albedo");
+    e.albedo_g = albedo[1];
+    /* A bad wi fails its lane in its direction only; the error names both. */
+    wi[(0 * K + 1) * N + 4] = NAN;
+    fill_floats(all, 4 * K * N, -1.0f);
+    check_error(fx, glint_material_eval_batch(&e), GLINT_ERROR_INVALID_ARGUMENT);
+    assert_error_mentions("direction 1, lane 4");
+    assert_true(all[3 * K * N + N + 4] == 0.0f && all[3 * K * N + 4] >= 0.0f);
+    assert_true(all[3 * K * N + 2 * N + 4] >= 0.0f);
+    free(wi);
+    free(all);
+    free(d);
+    glint_material_destroy(m);
+}
+
 /* Counts far beyond the arrays are refused by every material batch before any lane is
  * read or written (the arrays hold N lanes). */
 static void huge_material_batch_counts_are_refused(void **state)
@@ -685,6 +772,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(batches_equal_the_lanes_closures, fixture_setup,
                                         fixture_teardown),
         cmocka_unit_test_setup_teardown(batch_errors, fixture_setup, fixture_teardown),
+        cmocka_unit_test_setup_teardown(several_directions_in_one_call, fixture_setup,
+                                        fixture_teardown),
         cmocka_unit_test_setup_teardown(huge_material_batch_counts_are_refused, fixture_setup,
                                         fixture_teardown),
         cmocka_unit_test_setup_teardown(materials_outliving_their_runtime_are_invalid,
