@@ -193,7 +193,7 @@ fn stage_chunk(
     len: usize,
     s: &mut Scratch,
     errors: &mut LaneError,
-    eval: Option<StageEval<'_>>,
+    eval: Option<StageEval<'_, '_>>,
 ) -> Result<(), Error> {
     if eval.is_none() && stage_raw(kernels, input, lanes, len, s)? {
         return Ok(());
@@ -208,32 +208,75 @@ fn stage_chunk(
     let rows = &mut s.material;
     // In the order the scalar call checks them: a lane reports its first error.
     let mut any = stage_directions(
-        kernels, input.wo, "wo", lanes, len, &mut s.wo, failed, errors,
+        kernels,
+        input.wo,
+        "wo",
+        lanes,
+        rows3(&mut s.wo, len),
+        failed,
+        errors,
     );
     any |= stage_directions(
         kernels,
         input.normal,
         "normal",
         lanes,
-        len,
-        &mut rows.normal,
+        rows3(&mut rows.normal, len),
         failed,
         errors,
     );
     any |= stage_frames(kernels, input, lanes, len, rows, failed, errors);
     let (failed_override, per_lane) = stage_blocks(input, lanes, len, rows, failed, errors);
     any |= failed_override;
-    if let Some(e) = &eval {
-        any |= stage_directions(kernels, e.wi, "wi", lanes, len, &mut s.wi, failed, errors);
-    }
     s.any_failed = any;
-    let mut eval = eval.filter(|e| e.in_pass).map(|e| {
-        [ExpandEval {
-            wi: view3(&s.wi, len),
-            value: e.want_value.then(|| rows3(&mut s.value, len)),
-            pdf: grow(&mut s.pdf, len),
-        }]
-    });
+    let mut evals = Vec::new();
+    let mut albedo = None;
+    if let Some(e) = eval {
+        // Each direction's `wi` after the lane's own inputs, its failures (the lane's
+        // and its `wi`'s) in that direction's flags.
+        let k = e.errors.len();
+        super::stage::reserve(&mut s.failed_directions, k * len)?;
+        for row in s.wi.iter_mut().chain(&mut s.value).chain([&mut s.pdf]) {
+            super::stage::reserve(row, k * len)?;
+        }
+        let [x, y, z] = rows3(&mut s.wi, k * len);
+        let rows = x
+            .chunks_exact_mut(len)
+            .zip(y.chunks_exact_mut(len))
+            .zip(z.chunks_exact_mut(len));
+        let flags = grow(&mut s.failed_directions, k * len).chunks_exact_mut(len);
+        for (d, ((((x, y), z), flags), errors)) in rows.zip(flags).zip(&mut *e.errors).enumerate() {
+            flags.copy_from_slice(failed);
+            let wi = direction(e.wi, d, e.count);
+            s.any_failed |= stage_directions(kernels, wi, "wi", lanes, [x, y, z], flags, errors);
+        }
+        if e.in_pass {
+            super::stage::reserve(&mut evals, k)?;
+            let wi = view3(&s.wi, k * len);
+            let [x, y, z] = rows3(&mut s.value, k * len);
+            let values = x
+                .chunks_exact_mut(len)
+                .zip(y.chunks_exact_mut(len))
+                .zip(z.chunks_exact_mut(len));
+            for (d, (((x, y), z), pdf)) in values
+                .zip(grow(&mut s.pdf, k * len).chunks_exact_mut(len))
+                .enumerate()
+            {
+                let at = d * len..(d + 1) * len;
+                evals.push(ExpandEval {
+                    wi: wi.map(|row| &row[at.clone()]),
+                    value: e.want_value.then_some([x, y, z]),
+                    pdf,
+                });
+            }
+            if e.albedo {
+                for row in &mut s.albedo {
+                    super::stage::reserve(row, len)?;
+                }
+                albedo = Some(rows3(&mut s.albedo, len));
+            }
+        }
+    }
     let mut job = ExpandJob {
         len,
         lanes: ExpandLanes::Staged {
@@ -250,8 +293,8 @@ fn stage_chunk(
         probability: grow(&mut rows.probability, MAX_SLOTS * len),
         kept: [false; MAX_SLOTS],
         sample: None,
-        albedo: None,
-        evals: eval.as_mut().map_or(&mut [], |e| &mut e[..]),
+        albedo,
+        evals: &mut evals,
         staged: None,
         out_of_range: false,
     };
@@ -260,14 +303,20 @@ fn stage_chunk(
     Ok(())
 }
 
-/// What an eval asks of [`stage_chunk`]: `wi` staged, and with `in_pass` the value
-/// (when `want_value`) and pdf finished in the staging pass into `s.value` and `s.pdf`
-/// (`kernels::expand::ExpandEval`) instead of the slots' rows written.
-#[derive(Clone, Copy)]
-struct StageEval<'a> {
+/// What an eval asks of [`stage_chunk`]: each direction's `wi` staged (direction `d`
+/// at `d len` of `s.wi`, its failed lanes at `d len` of `s.failed_directions`), and
+/// with `in_pass` the values (when `want_value`) and pdfs of every direction, and the
+/// albedos when asked, finished in the staging pass into `s.value`, `s.pdf` and
+/// `s.albedo` (`kernels::expand::ExpandEval`) instead of the slots' rows written.
+struct StageEval<'a, 'e> {
+    /// Every direction's `wi`, `count` lanes a direction.
     wi: Soa3<'a>,
+    count: usize,
+    /// Each direction's errors of its `wi` (a lane's other errors go to `errors`).
+    errors: &'e mut [LaneError],
     want_value: bool,
     in_pass: bool,
+    albedo: bool,
 }
 
 /// Each lane's shading frame (from the staged normal and the caller's tangent, as
@@ -805,10 +854,11 @@ fn eval_block(
     if in_pass && input.active.is_none() && eval_raw(kernels, input, wi, start..end, start, out)? {
         return Ok(());
     }
+    let directions = out.directions.len();
     let mut failures = Vec::new();
-    super::stage::reserve(&mut failures, out.directions.len())?;
-    failures.resize_with(out.directions.len(), LaneError::default);
-    let mut albedo_failure = LaneError::default();
+    super::stage::reserve(&mut failures, directions)?;
+    failures.resize_with(directions, LaneError::default);
+    let mut lane_errors = LaneError::default();
     with_scratch(|s| {
         for_chunks(input, start..end, s, |lanes, s| {
             if in_pass
@@ -817,40 +867,35 @@ fn eval_block(
             {
                 return Ok(());
             }
-            // Staged direction by direction: each as an eval of its direction alone.
-            for (d, (o, failure)) in out.directions.iter_mut().zip(&mut failures).enumerate() {
-                let wi = direction(wi, d, input.count);
-                eval_staged(kernels, input, wi, lanes, start, s, failure, o)?;
-            }
-            if let Some(a) = out.albedo.as_mut() {
-                albedo_chunk(kernels, input, lanes, start, s, &mut albedo_failure, a)?;
-            }
-            Ok(())
+            let errors = (&mut lane_errors, &mut failures[..]);
+            eval_staged(kernels, input, wi, lanes, start, s, errors, out)
         })
     })?;
-    let named = failures.len() > 1;
+    // The lowest failing lane; in a lane, its own inputs' error before its `wi`'s.
+    let lane_level = lane_errors.lane().map(|lane| (lane, 0, 0));
     let first = failures
-        .iter_mut()
+        .iter()
         .enumerate()
-        .filter_map(|(d, f)| f.lane().map(|lane| (lane, d)))
+        .filter_map(|(d, f)| f.lane().map(|lane| (lane, d, 1)))
+        .chain(lane_level)
         .min();
-    match first {
-        Some((_, d)) => {
-            let e = failures[d]
-                .take()
-                .expect("a failing direction has an error");
-            Err(if named {
-                Error::new(e.status, format!("direction {d}, {}", e.message))
-            } else {
-                e
-            })
-        }
-        None => albedo_failure.take().map_or(Ok(()), Err),
-    }
+    let (d, error) = match first {
+        None => return Ok(()),
+        Some((_, d, 0)) => (d, lane_errors.take()),
+        Some((_, d, _)) => (d, failures[d].take()),
+    };
+    let e = error.expect("a failing lane has an error");
+    Err(if directions > 1 {
+        Error::new(e.status, format!("direction {d}, {}", e.message))
+    } else {
+        e
+    })
 }
 
-/// One direction of a chunk's eval, staged: `wi` staged with the lanes, the value and
-/// pdf finished in the staging pass or slot by slot (with the reverse pdf).
+/// A chunk's eval, staged: the lanes' inputs once and each direction's `wi`, every
+/// direction's value and pdf and the albedos finished in the staging pass from one
+/// expansion; with the reverse pdf, direction by direction, slot by slot over the
+/// slots' rows. `errors`: the lanes' own, and each direction's `wi`'s.
 #[allow(clippy::too_many_arguments)]
 fn eval_staged(
     kernels: Kernels,
@@ -859,29 +904,69 @@ fn eval_staged(
     lanes: &[u32],
     start: usize,
     s: &mut Scratch,
-    failure: &mut LaneError,
-    out: &mut DirectionOutput<'_>,
+    (errors, failures): (&mut LaneError, &mut [LaneError]),
+    out: &mut MaterialEvalOutput<'_>,
 ) -> Result<(), Error> {
     let len = padded(lanes.len());
-    let eval = StageEval {
-        wi,
-        want_value: out.value.is_some(),
-        in_pass: out.pdf_reverse.is_none(),
-    };
-    stage_chunk(kernels, input, lanes, len, s, failure, Some(eval))?;
-    if !eval.in_pass {
-        eval_chunk(kernels, input.material, len, s, eval.want_value);
-    }
-    if let Some(v) = out.value.as_mut() {
-        for (staged, out) in s.value.iter().zip([&mut *v.x, &mut *v.y, &mut *v.z]) {
-            scatter(lanes, start, &s.failed, staged, out);
+    let want_value = out.directions.iter().any(|d| d.value.is_some());
+    if out.directions.iter().all(|d| d.pdf_reverse.is_none()) {
+        let eval = StageEval {
+            wi,
+            count: input.count,
+            errors: failures,
+            want_value,
+            in_pass: true,
+            albedo: out.albedo.is_some(),
+        };
+        stage_chunk(kernels, input, lanes, len, s, errors, Some(eval))?;
+        for (d, o) in out.directions.iter_mut().enumerate() {
+            scatter_direction(lanes, start, s, d * len..(d + 1) * len, o);
         }
+        if let Some(a) = out.albedo.as_mut() {
+            for (staged, out) in s.albedo.iter().zip([&mut *a.x, &mut *a.y, &mut *a.z]) {
+                scatter(lanes, start, &s.failed, staged, out);
+            }
+        }
+        return Ok(());
     }
-    scatter(lanes, start, &s.failed, &s.pdf, out.pdf);
-    if let Some(rev) = out.pdf_reverse.as_deref_mut() {
-        scatter(lanes, start, &s.failed, &s.pdf_reverse, rev);
+    for (d, (o, failure)) in out.directions.iter_mut().zip(failures).enumerate() {
+        let eval = StageEval {
+            wi: direction(wi, d, input.count),
+            count: input.count,
+            errors: std::slice::from_mut(failure),
+            want_value,
+            in_pass: false,
+            albedo: false,
+        };
+        stage_chunk(kernels, input, lanes, len, s, errors, Some(eval))?;
+        eval_chunk(kernels, input.material, len, s, want_value);
+        scatter_direction(lanes, start, s, 0..len, o);
+    }
+    if let Some(a) = out.albedo.as_mut() {
+        albedo_chunk(kernels, input, lanes, start, s, errors, a)?;
     }
     Ok(())
+}
+
+/// One direction's staged outputs (at `rows` of the scratch rows) to the caller's,
+/// zero where the lane or its `wi` failed.
+fn scatter_direction(
+    lanes: &[u32],
+    start: usize,
+    s: &Scratch,
+    rows: Range<usize>,
+    out: &mut DirectionOutput<'_>,
+) {
+    let failed = &s.failed_directions[rows.clone()];
+    if let Some(v) = out.value.as_mut() {
+        for (staged, out) in s.value.iter().zip([&mut *v.x, &mut *v.y, &mut *v.z]) {
+            scatter(lanes, start, failed, &staged[rows.clone()], out);
+        }
+    }
+    scatter(lanes, start, failed, &s.pdf[rows.clone()], out.pdf);
+    if let Some(rev) = out.pdf_reverse.as_deref_mut() {
+        scatter(lanes, start, failed, &s.pdf_reverse[rows], rev);
+    }
 }
 
 /// The caller's lanes of a chunk of consecutive lanes, and each overridden value's

@@ -756,8 +756,7 @@ fn stage_input<'a, C: ClosureSource<'a>>(
             src,
             what,
             &lanes,
-            len,
-            rows,
+            rows3(rows, len),
             failed,
             &mut groups.error,
         );

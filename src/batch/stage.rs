@@ -324,21 +324,19 @@ pub(super) fn padded(lanes: usize) -> usize {
     lanes.div_ceil(LANE_MULTIPLE) * LANE_MULTIPLE
 }
 
-/// Stage `src` at `lanes` into `dst`, normalized, padding to `len` with +z. Lanes
-/// with invalid directions are flagged in `failed`, reported to `errors`, and staged
-/// as +z; returns whether there were any.
-#[allow(clippy::too_many_arguments)]
+/// Stage `src` at `lanes` into `rows` (`len` values each), normalized, padding with
+/// +z. Lanes with invalid directions are flagged in `failed`, reported to `errors`,
+/// and staged as +z; returns whether there were any.
 pub(super) fn stage_directions(
     kernels: Kernels,
     src: Soa3<'_>,
     what: &str,
     lanes: &[u32],
-    len: usize,
-    dst: &mut [Vec<f32>; 3],
+    mut rows: [&mut [f32]; 3],
     failed: &mut [u8],
     errors: &mut LaneError,
 ) -> bool {
-    let mut rows = rows3(dst, len);
+    let len = rows[0].len();
     let n = lanes.len();
     let sources = [src.x, src.y, src.z];
     match (lanes.first(), lanes.last()) {
@@ -457,10 +455,15 @@ pub(super) struct Scratch {
     pub wi: [Vec<f32>; 3],
     pub u: [Vec<f32>; 3],
     pub failed: Vec<u8>,
+    /// An eval's lanes failed in each direction (`failed` or their `wi`), `len` a
+    /// direction.
+    pub failed_directions: Vec<u8>,
     /// Whether any lane of the current group is flagged in `failed`.
     pub any_failed: bool,
     /// Accumulated value, pdf and reverse pdf.
     pub value: [Vec<f32>; 3],
+    /// A material eval's albedos, taken in its staging pass.
+    pub albedo: [Vec<f32>; 3],
     pub pdf: Vec<f32>,
     pub pdf_reverse: Vec<f32>,
     /// The chosen lobe's sample.
