@@ -6,12 +6,14 @@
  * environment the ray sees. Pass 2 shades the image a scanline at a time,
  *   L = L_ambient * albedo(wo) + sum over lights of f(wo, wi) |cos| E_light V,
  * with the row's surface pixels as lanes grouped by material:
- *  - compiled materials (material documents): per material, one glint_material_albedo_batch
- *    and one glint_material_eval_batch per light over its lanes (world-space wo, normal and
- *    tangent per lane); no closure is built;
+ *  - compiled materials (material documents): per material, one glint_material_eval_batch
+ *    over its lanes (world-space wo, normal and tangent per lane) at every delta light's
+ *    direction (direction_count) with the albedo in the same call: each lane is expanded
+ *    once for the ambient term and all lights; no closure is built;
  *  - closures given as lobes: each pixel's closure built lobe by lobe in the thread's arena,
  *    then one glint_albedo_batch and one glint_eval_batch per light over per-lane closures.
- * Shadowed or unlit lanes are masked off.
+ * Shadowed or unlit lanes are masked off (a compiled material's are evaluated at their
+ * view direction and weighted by zero).
  *
  * Lights: the scene's point and directional lights; a quad light, which a scanline renderer
  * has no way to sample, is stood in for by a point light at its center with its on-axis
@@ -74,11 +76,17 @@ typedef struct worker {
     int *group;     /* material_count + 2 lane offsets */
     int *pixel;     /* the pixel (x) of each lane */
     const glint_closure **closures;
-    uint8_t *has_closure, *lit;
+    uint8_t *has_closure;
     /* In the lane's Glint space (ex_surface.space): wo, wi. In world space: the shading
      * normal and tangent compiled materials are given. */
-    float *wo[3], *wi[3], *normal[3], *tangent[3], *value[3], *pdf;
+    float *wo[3], *normal[3], *tangent[3], *albedo[3];
+    /* Per lane and delta light (light_slot): whether lit, wi, E, the eval's value and
+     * pdf; a group's lanes [first, first + count) hold count entries a light. */
+    uint8_t *lit;
+    float *wi[3], *value[3], *pdf;
     vec3 *irradiance;
+    size_t *slot0; /* lane l's entry of light 0; light d's is slot0[l] + d * stride[l] */
+    int *stride;
     uint64_t glint_ns[GLINT_KINDS], glint_calls[GLINT_KINDS], rays, closures_built;
     uint64_t material_lanes, errors;
     double seconds[2];
@@ -136,6 +144,19 @@ static void put_lane(float *const soa[3], int lane, vec3 v)
     soa[2][lane] = v.z;
 }
 
+/* The per-light arrays' blocks: one per delta light, at least one. */
+static int light_rows(const ex_scene *s)
+{
+    const int n = delta_light_count(s);
+    return n > 0 ? n : 1;
+}
+
+/* Lane l's entry for delta light d in the per-light arrays. */
+static size_t light_slot(const worker *w, int l, int d)
+{
+    return w->slot0[l] + (size_t)d * (size_t)w->stride[l];
+}
+
 /* A surface pixel's bucket: 0 for the materials given as lobes, m + 1 for compiled
  * material m. */
 static int lane_bucket(const ex_scene *s, const ex_surface *sf)
@@ -170,6 +191,14 @@ static int group_row(worker *w, const gpixel *row)
     for (b = buckets; b > 0; b--)
         group[b] = group[b - 1];
     group[0] = 0;
+    for (b = 0; b < buckets; b++) {
+        const int first = group[b], count = group[b + 1] - first;
+        int l;
+        for (l = first; l < first + count; l++) {
+            w->slot0[l] = (size_t)light_rows(s) * (size_t)first + (size_t)(l - first);
+            w->stride[l] = count;
+        }
+    }
     w->material_lanes += (uint64_t)(group[buckets] - group[1]);
     return group[buckets];
 }
@@ -223,127 +252,158 @@ static glint_material_lanes material_lanes(const worker *w, int m, int first, in
     return ln;
 }
 
-/* rgb += ambient * albedo(wo) over the row's lanes. */
-static void shade_ambient(worker *w, int lanes, float *rgb)
+/* Each delta light's direction, irradiance and visibility at every lane (light_slot). An
+ * unlit lane's wi is its view direction (a valid direction its material is evaluated at). */
+static void light_lanes(worker *w, const gpixel *row, int lanes)
 {
-    const vec3 a = w->sh->ambient;
+    const shared *sh = w->sh;
     const int lobe_lanes = w->group[1];
+    int d, l;
+    for (d = 0; d < delta_light_count(sh->scene); d++)
+        for (l = 0; l < lanes; l++) {
+            const ex_surface *sf = &row[w->pixel[l]].sf;
+            const size_t i = light_slot(w, l, d);
+            vec3 wi, so, sd;
+            float len;
+            w->lit[i] = 0;
+            put_lane(w->wi, (int)i, sf->wo_space);
+            if ((l < lobe_lanes && !w->has_closure[l]) ||
+                !delta_light_at(sh->scene, d, sf, &wi, &so, &sd, &len, &w->irradiance[i]) ||
+                v_is_zero(w->irradiance[i]))
+                continue;
+            w->rays++;
+            if (scene_occluded(sh->scene, &w->ictx, so, sd, len))
+                continue;
+            put_lane(w->wi, (int)i, frame_to_local(&sf->space, wi));
+            w->lit[i] = 1;
+        }
+}
+
+/* The closures given as lobes: albedo (when `ambient`) and, per delta light, the eval at
+ * the lit lanes, over per-lane closures. */
+static void shade_lobe_lanes(worker *w, int ambient)
+{
+    const int lanes = w->group[1];
     glint_status st;
-    int m, l;
-    if (lobe_lanes > 0) {
+    int d;
+    if (lanes == 0)
+        return;
+    if (ambient) {
         glint_albedo_batch_args args;
         memset(&args, 0, sizeof args);
         args.struct_size = sizeof args;
-        args.count = (size_t)lobe_lanes;
+        args.count = (size_t)lanes;
         args.closures = w->closures;
         args.active = w->has_closure;
         args.wo_x = w->wo[0];
         args.wo_y = w->wo[1];
         args.wo_z = w->wo[2];
-        args.albedo_r = w->value[0];
-        args.albedo_g = w->value[1];
-        args.albedo_b = w->value[2];
+        args.albedo_r = w->albedo[0];
+        args.albedo_g = w->albedo[1];
+        args.albedo_b = w->albedo[2];
         GLINT_TIMED(w, GLINT_BATCH, st, glint_albedo_batch(&args));
         if (st != GLINT_OK)
             record_error(w, "glint_albedo_batch", st);
     }
-    for (m = 0; m < w->sh->scene->material_count; m++) {
-        const int first = w->group[m + 1], count = w->group[m + 2] - first;
-        glint_material_albedo_batch_args args;
-        if (count == 0)
-            continue;
-        memset(&args, 0, sizeof args);
-        args.struct_size = sizeof args;
-        args.lanes = material_lanes(w, m, first, count, NULL);
-        args.albedo_r = w->value[0] + first;
-        args.albedo_g = w->value[1] + first;
-        args.albedo_b = w->value[2] + first;
-        GLINT_TIMED(w, GLINT_MATERIAL_BATCH, st, glint_material_albedo_batch(&args));
-        if (st != GLINT_OK)
-            record_error(w, "glint_material_albedo_batch", st);
-    }
-    for (l = 0; l < lanes; l++)
-        if (l >= lobe_lanes || w->has_closure[l]) {
-            float *px = &rgb[3 * w->pixel[l]];
-            px[0] += a.x * w->value[0][l];
-            px[1] += a.y * w->value[1][l];
-            px[2] += a.z * w->value[2][l];
-        }
-}
-
-/* rgb += f(wo, wi) |cos| E V for delta light `light` over the row's lanes. */
-static void shade_light(worker *w, const gpixel *row, int lanes, int light, float *rgb)
-{
-    const shared *sh = w->sh;
-    const int lobe_lanes = w->group[1];
-    glint_status st;
-    int l, m, lit = 0;
-    for (l = 0; l < lanes; l++) {
-        const ex_surface *sf = &row[w->pixel[l]].sf;
-        vec3 wi, so, sd;
-        float len;
-        w->lit[l] = 0;
-        if ((l < lobe_lanes && !w->has_closure[l]) ||
-            !delta_light_at(sh->scene, light, sf, &wi, &so, &sd, &len, &w->irradiance[l]) ||
-            v_is_zero(w->irradiance[l]))
-            continue;
-        w->rays++;
-        if (scene_occluded(sh->scene, &w->ictx, so, sd, len))
-            continue;
-        put_lane(w->wi, l, frame_to_local(&sf->space, wi));
-        w->lit[l] = 1;
-        lit++;
-    }
-    if (!lit)
-        return;
-    if (memchr(w->lit, 1, (size_t)lobe_lanes)) {
+    for (d = 0; d < delta_light_count(w->sh->scene); d++) {
+        const size_t at = (size_t)d * (size_t)lanes;
         glint_eval_batch_args args;
+        if (!memchr(w->lit + at, 1, (size_t)lanes))
+            continue;
         memset(&args, 0, sizeof args);
         args.struct_size = sizeof args;
-        args.count = (size_t)lobe_lanes;
+        args.count = (size_t)lanes;
         args.closures = w->closures;
-        args.active = w->lit;
+        args.active = w->lit + at;
         args.wo_x = w->wo[0];
         args.wo_y = w->wo[1];
         args.wo_z = w->wo[2];
-        args.wi_x = w->wi[0];
-        args.wi_y = w->wi[1];
-        args.wi_z = w->wi[2];
-        args.value_r = w->value[0];
-        args.value_g = w->value[1];
-        args.value_b = w->value[2];
-        args.pdf = w->pdf;
+        args.wi_x = w->wi[0] + at;
+        args.wi_y = w->wi[1] + at;
+        args.wi_z = w->wi[2] + at;
+        args.value_r = w->value[0] + at;
+        args.value_g = w->value[1] + at;
+        args.value_b = w->value[2] + at;
+        args.pdf = w->pdf + at;
         GLINT_TIMED(w, GLINT_BATCH, st, glint_eval_batch(&args));
         if (st != GLINT_OK)
             record_error(w, "glint_eval_batch", st);
     }
-    for (m = 0; m < sh->scene->material_count; m++) {
-        const int first = w->group[m + 1], count = w->group[m + 2] - first;
-        glint_material_eval_batch_args args;
-        if (count == 0 || !memchr(w->lit + first, 1, (size_t)count))
-            continue;
+}
+
+/* Compiled material m's lanes: one call for the albedo (when `ambient`) and the eval at
+ * every delta light's direction, each lane expanded once; the albedo call alone when
+ * the scene has no delta lights. */
+static void shade_material_lanes(worker *w, int m, int ambient)
+{
+    const int first = w->group[m + 1], count = w->group[m + 2] - first;
+    const int lights = delta_light_count(w->sh->scene);
+    const size_t at = (size_t)light_rows(w->sh->scene) * (size_t)first;
+    glint_status st;
+    if (count == 0 || (!ambient && lights == 0))
+        return;
+    if (lights == 0) {
+        glint_material_albedo_batch_args args;
         memset(&args, 0, sizeof args);
         args.struct_size = sizeof args;
-        args.lanes = material_lanes(w, m, first, count, w->lit);
-        args.wi_x = w->wi[0] + first;
-        args.wi_y = w->wi[1] + first;
-        args.wi_z = w->wi[2] + first;
-        args.value_r = w->value[0] + first;
-        args.value_g = w->value[1] + first;
-        args.value_b = w->value[2] + first;
-        args.pdf = w->pdf + first;
+        args.lanes = material_lanes(w, m, first, count, NULL);
+        args.albedo_r = w->albedo[0] + first;
+        args.albedo_g = w->albedo[1] + first;
+        args.albedo_b = w->albedo[2] + first;
+        GLINT_TIMED(w, GLINT_MATERIAL_BATCH, st, glint_material_albedo_batch(&args));
+        if (st != GLINT_OK)
+            record_error(w, "glint_material_albedo_batch", st);
+        return;
+    }
+    {
+        glint_material_eval_batch_args args;
+        memset(&args, 0, sizeof args);
+        args.struct_size = sizeof args;
+        args.lanes = material_lanes(w, m, first, count, NULL);
+        args.direction_count = (size_t)lights;
+        args.wi_x = w->wi[0] + at;
+        args.wi_y = w->wi[1] + at;
+        args.wi_z = w->wi[2] + at;
+        args.value_r = w->value[0] + at;
+        args.value_g = w->value[1] + at;
+        args.value_b = w->value[2] + at;
+        args.pdf = w->pdf + at;
+        if (ambient) {
+            args.albedo_r = w->albedo[0] + first;
+            args.albedo_g = w->albedo[1] + first;
+            args.albedo_b = w->albedo[2] + first;
+        }
         GLINT_TIMED(w, GLINT_MATERIAL_BATCH, st, glint_material_eval_batch(&args));
         if (st != GLINT_OK)
             record_error(w, "glint_material_eval_batch", st);
     }
-    for (l = 0; l < lanes; l++)
-        if (w->lit[l]) {
-            const vec3 e = w->irradiance[l];
-            float *px = &rgb[3 * w->pixel[l]];
-            px[0] += w->value[0][l] * e.x;
-            px[1] += w->value[1][l] * e.y;
-            px[2] += w->value[2][l] * e.z;
+}
+
+/* rgb += ambient * albedo(wo) + sum over lit lights of f(wo, wi) |cos| E. */
+static void accumulate(worker *w, int lanes, int ambient, float *rgb)
+{
+    const vec3 a = w->sh->ambient;
+    const int lobe_lanes = w->group[1];
+    int l, d;
+    for (l = 0; l < lanes; l++) {
+        float *px = &rgb[3 * w->pixel[l]];
+        if (l < lobe_lanes && !w->has_closure[l])
+            continue;
+        if (ambient) {
+            px[0] += a.x * w->albedo[0][l];
+            px[1] += a.y * w->albedo[1][l];
+            px[2] += a.z * w->albedo[2][l];
         }
+        for (d = 0; d < delta_light_count(w->sh->scene); d++) {
+            const size_t i = light_slot(w, l, d);
+            if (w->lit[i]) {
+                const vec3 e = w->irradiance[i];
+                px[0] += w->value[0][i] * e.x;
+                px[1] += w->value[1][i] * e.y;
+                px[2] += w->value[2][i] * e.z;
+            }
+        }
+    }
 }
 
 static void shade_row(worker *w, int y)
@@ -352,7 +412,7 @@ static void shade_row(worker *w, int y)
     const int width = sh->view.width;
     const gpixel *row = &sh->gbuf[(size_t)y * (size_t)width];
     float *rgb = &sh->rgb[3 * (size_t)y * (size_t)width];
-    int x, i, lanes;
+    int x, m, lanes, ambient;
     for (x = 0; x < width; x++) {
         const vec3 e = row[x].kind == PIX_SURFACE ? v3(0, 0, 0) : row[x].radiance;
         rgb[3 * x + 0] = e.x;
@@ -363,10 +423,12 @@ static void shade_row(worker *w, int y)
     if (lanes == 0)
         return;
     build_lobe_closures(w, row);
-    if (!v_is_zero(sh->ambient))
-        shade_ambient(w, lanes, rgb);
-    for (i = 0; i < delta_light_count(sh->scene); i++)
-        shade_light(w, row, lanes, i, rgb);
+    light_lanes(w, row, lanes);
+    ambient = !v_is_zero(sh->ambient);
+    shade_lobe_lanes(w, ambient);
+    for (m = 0; m < sh->scene->material_count; m++)
+        shade_material_lanes(w, m, ambient);
+    accumulate(w, lanes, ambient, rgb);
 }
 
 /* ---- threads ---------------------------------------------------------------------------- */
@@ -412,7 +474,7 @@ static double run_pass(shared *sh, worker *workers, int count, int pass)
 
 static int worker_init(worker *w, shared *sh, int width)
 {
-    const size_t n = (size_t)width;
+    const size_t n = (size_t)width, nl = n * (size_t)light_rows(sh->scene);
     int k;
     memset(w, 0, sizeof *w);
     w->sh = sh;
@@ -425,19 +487,23 @@ static int worker_init(worker *w, shared *sh, int width)
     w->pixel = calloc(n, sizeof *w->pixel);
     w->closures = calloc(n, sizeof *w->closures);
     w->has_closure = calloc(n, 1);
-    w->lit = calloc(n, 1);
-    w->pdf = calloc(n, sizeof(float));
-    w->irradiance = calloc(n, sizeof *w->irradiance);
+    w->lit = calloc(nl, 1);
+    w->pdf = calloc(nl, sizeof(float));
+    w->irradiance = calloc(nl, sizeof *w->irradiance);
+    w->slot0 = calloc(n, sizeof *w->slot0);
+    w->stride = calloc(n, sizeof *w->stride);
     if (!w->group || !w->pixel || !w->closures || !w->has_closure || !w->lit || !w->pdf ||
-        !w->irradiance)
+        !w->irradiance || !w->slot0 || !w->stride)
         return -1;
     for (k = 0; k < 3; k++) {
         w->wo[k] = calloc(n, sizeof(float));
-        w->wi[k] = calloc(n, sizeof(float));
+        w->wi[k] = calloc(nl, sizeof(float));
         w->normal[k] = calloc(n, sizeof(float));
         w->tangent[k] = calloc(n, sizeof(float));
-        w->value[k] = calloc(n, sizeof(float));
-        if (!w->wo[k] || !w->wi[k] || !w->normal[k] || !w->tangent[k] || !w->value[k])
+        w->albedo[k] = calloc(n, sizeof(float));
+        w->value[k] = calloc(nl, sizeof(float));
+        if (!w->wo[k] || !w->wi[k] || !w->normal[k] || !w->tangent[k] || !w->albedo[k] ||
+            !w->value[k])
             return -1;
     }
     return 0;
@@ -454,11 +520,14 @@ static void worker_free(worker *w)
     free(w->lit);
     free(w->pdf);
     free(w->irradiance);
+    free(w->slot0);
+    free(w->stride);
     for (k = 0; k < 3; k++) {
         free(w->wo[k]);
         free(w->wi[k]);
         free(w->normal[k]);
         free(w->tangent[k]);
+        free(w->albedo[k]);
         free(w->value[k]);
     }
 }
