@@ -4,8 +4,10 @@
 //! scripts/bench_vs_mitsuba.py's `principled` case); the material batch gets per-lane
 //! `wo`, a normal and two overrides per lane (base color and roughness, as a textured
 //! host passes), the prebuilt closure only `wo`. Eval, sample and albedo (a scanline
-//! host's ambient term), on the calling thread, at 4096 and 65536 lanes. Run:
-//! `cargo bench --bench material`.
+//! host's ambient term), on the calling thread, at 4096 and 65536 lanes; and a scanline
+//! host's shading with two lights (`scanline2`): the albedo and the eval at two
+//! directions per lane, one material call (`material::eval_directions`) against the
+//! prebuilt closure's albedo and two evals. Run: `cargo bench --bench material`.
 
 mod common;
 
@@ -37,6 +39,10 @@ struct Lanes {
     roughness: Vec<f32>,
     value: [Vec<f32>; 3],
     pdf: Vec<f32>,
+    /// Two directions per lane (`scanline2`): `wi`, value and pdf rows of `2 n`.
+    wi2: [Vec<f32>; 3],
+    value2: [Vec<f32>; 3],
+    pdf2: Vec<f32>,
     s_wi: [Vec<f32>; 3],
     weight: [Vec<f32>; 3],
 }
@@ -58,6 +64,9 @@ impl Lanes {
             roughness: u.row(n).iter().map(|x| 0.3 + 0.4 * x).collect(),
             value: zeros(n),
             pdf: vec![0.0; n],
+            wi2: u.directions(2 * n),
+            value2: zeros(2 * n),
+            pdf2: vec![0.0; 2 * n],
             s_wi: zeros(n),
             weight: zeros(n),
         }
@@ -92,6 +101,8 @@ enum Call {
     Eval,
     Sample,
     Albedo,
+    /// The albedo and the eval at two directions per lane.
+    Scanline2,
 }
 
 fn run_material(exec: &Exec<'_>, m: &Material, l: &mut Lanes, call: Call) {
@@ -135,6 +146,16 @@ fn run_material(exec: &Exec<'_>, m: &Material, l: &mut Lanes, call: Call) {
             material::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
         }
         Call::Albedo => material::albedo(exec, &input, soa_mut(&mut l.value)).expect("valid batch"),
+        Call::Scanline2 => {
+            let out = EvalOutput {
+                value: soa_mut(&mut l.value2),
+                pdf: &mut l.pdf2,
+                pdf_reverse: None,
+            };
+            let albedo = Some(soa_mut(&mut l.value));
+            material::eval_directions(exec, &input, soa(&l.wi2), 2, out, albedo)
+                .expect("valid batch");
+        }
     }
     (l.wo, l.normal, l.base_color, l.roughness) = (wo, normal, base_color, roughness);
 }
@@ -162,6 +183,30 @@ fn run_closure(exec: &Exec<'_>, c: &glint::Closure, l: &mut Lanes, call: Call) {
             batch::eval(exec, &input, soa(&l.wi), out).expect("valid batch");
         }
         Call::Albedo => batch::albedo(exec, &input, soa_mut(&mut l.value)).expect("valid batch"),
+        Call::Scanline2 => {
+            batch::albedo(exec, &input, soa_mut(&mut l.value)).expect("valid batch");
+            let n = l.pdf.len();
+            let [x, y, z] = &l.wi2;
+            let [r, g, b] = &mut l.value2;
+            for ((((x, y), z), (r, (g, b))), pdf) in x
+                .chunks_exact(n)
+                .zip(y.chunks_exact(n))
+                .zip(z.chunks_exact(n))
+                .zip(
+                    r.chunks_exact_mut(n)
+                        .zip(g.chunks_exact_mut(n).zip(b.chunks_exact_mut(n))),
+                )
+                .zip(l.pdf2.chunks_exact_mut(n))
+            {
+                let out = EvalOutput {
+                    value: glint::batch::Soa3Mut { x: r, y: g, z: b },
+                    pdf,
+                    pdf_reverse: None,
+                };
+                let wi = glint::batch::Soa3 { x, y, z };
+                batch::eval(exec, &input, wi, out).expect("valid batch");
+            }
+        }
     }
     l.wo = wo;
 }
@@ -187,6 +232,7 @@ fn materials(c: &mut Criterion) {
                 ("eval", Call::Eval),
                 ("sample", Call::Sample),
                 ("albedo", Call::Albedo),
+                ("scanline2", Call::Scanline2),
             ] {
                 group.bench_function(BenchmarkId::new(format!("material_{what}"), n), |b| {
                     b.iter(|| run_material(&exec, &m, black_box(l), call))
