@@ -176,6 +176,110 @@ static void closures_of_a_destroyed_runtime(void **state)
     free(l);
 }
 
+/* ---- D4: the quarantine bounds count only runtime and arena destroys ---------------- */
+
+static const char *DISNEY = "{\"material\": \"disney\"}";
+
+/* What a destroyed runtime and a destroyed arena leave behind. */
+typedef struct leftovers {
+    glint_runtime *rt;      /* destroyed */
+    glint_material *m;      /* a live material of rt */
+    glint_arena *kept;      /* a live arena */
+    glint_closure *of_rt;   /* a closure of rt in kept */
+    glint_arena *dead;      /* destroyed */
+    glint_closure *of_dead; /* a closure (of fx->rt) in dead */
+} leftovers;
+
+static leftovers leftovers_make(fixture *fx)
+{
+    leftovers d;
+    assert_ok(glint_runtime_create("threads=1", &d.rt));
+    assert_ok(glint_material_create(d.rt, DISNEY, &d.m));
+    assert_ok(glint_arena_create(4, &d.kept));
+    d.of_rt = from_json(d.rt, d.kept, LAMBERT);
+    assert_ok(glint_arena_create(4, &d.dead));
+    d.of_dead = from_json(fx->rt, d.dead, LAMBERT);
+    glint_runtime_destroy(d.rt);
+    glint_arena_destroy(d.dead);
+    return d;
+}
+
+/* Calls on the destroyed runtime, its material (scalar and batch) and its closure, and
+ * on the destroyed arena, fail with the documented messages (not "is not a ... handle
+ * (another kind of handle, or freed memory)", and nothing freed is read). */
+static void assert_still_destroyed(fixture *fx, const leftovers *d)
+{
+    uint32_t count = 99;
+    glint_closure *out = (glint_closure *)fx;
+    glint_shading_context ctx;
+    float wo[3] = {0.1f, 0.2f, 0.9f}, n[3] = {0.0f, 0.0f, 1.0f};
+    float albedo[3] = {GARBAGE, GARBAGE, GARBAGE};
+    glint_material_albedo_batch_args a;
+    check_error(fx, glint_lobe_type_count(d->rt, &count), GLINT_ERROR_INVALID_HANDLE);
+    assert_error_mentions("runtime was destroyed");
+    assert_int_equal(count, 0);
+    memset(&ctx, 0, sizeof ctx);
+    ctx.struct_size = sizeof ctx;
+    ctx.wo = test_wo();
+    ctx.normal = v3(0.0f, 0.0f, 1.0f);
+    check_error(fx, glint_material_closure(d->m, d->kept, &ctx, NULL, 0, &out),
+                GLINT_ERROR_INVALID_HANDLE);
+    assert_error_mentions("the material's runtime was destroyed");
+    assert_null(out);
+    memset(&a, 0, sizeof a);
+    a.struct_size = sizeof a;
+    a.lanes.material = d->m, a.lanes.count = 1;
+    a.lanes.wo_x = &wo[0], a.lanes.wo_y = &wo[1], a.lanes.wo_z = &wo[2];
+    a.lanes.normal_x = &n[0], a.lanes.normal_y = &n[1], a.lanes.normal_z = &n[2];
+    a.albedo_r = &albedo[0], a.albedo_g = &albedo[1], a.albedo_b = &albedo[2];
+    check_error(fx, glint_material_albedo_batch(&a), GLINT_ERROR_INVALID_HANDLE);
+    assert_error_mentions("the material's runtime was destroyed");
+    assert_eval_invalid(fx, d->of_rt);
+    assert_error_mentions("the closure's runtime was destroyed");
+    check_error(fx, glint_arena_reset(d->dead), GLINT_ERROR_INVALID_HANDLE);
+    assert_error_mentions("arena was destroyed");
+}
+
+static void leftovers_free(leftovers *d)
+{
+    glint_material_destroy(d->m);
+    glint_arena_destroy(d->kept);
+}
+
+/* Destroying more than GLINT_QUARANTINE_SHELLS materials after a runtime and an arena
+ * were destroyed frees neither: they, the runtime's material and closure, and the
+ * arena's closure are still detected (material destroys once shared their queue). */
+static void material_destroys_keep_runtimes_and_arenas_quarantined(void **state)
+{
+    fixture *fx = *state;
+    leftovers d = leftovers_make(fx);
+    for (int k = 0; k < GLINT_QUARANTINE_SHELLS + 100; k++) {
+        glint_material *t = NULL;
+        assert_ok(glint_material_create(fx->rt, DISNEY, &t));
+        glint_material_destroy(t);
+    }
+    assert_still_destroyed(fx, &d);
+    assert_eval_invalid(fx, d.of_dead);
+    assert_error_mentions("destroyed arena");
+    leftovers_free(&d);
+}
+
+/* Arenas whose slots together exceed GLINT_QUARANTINE_BYTES (each below it) free the
+ * oldest destroyed arenas' slots, never a shell: the runtime destroyed before them (and
+ * its material and closure) and the arena's shell are still detected. */
+static void arena_slot_bytes_keep_runtime_and_arena_shells_quarantined(void **state)
+{
+    fixture *fx = *state;
+    leftovers d = leftovers_make(fx);
+    for (int k = 0; k < 8; k++) { /* 65536 slots: some MiB each */
+        glint_arena *t = NULL;
+        assert_ok(glint_arena_create(65536, &t));
+        glint_arena_destroy(t);
+    }
+    assert_still_destroyed(fx, &d);
+    leftovers_free(&d);
+}
+
 /* ---- D5: handles from before glint_arena_reset -------------------------------------- */
 
 static void stale_handle_after_reset(void **state)
@@ -476,6 +580,8 @@ int main(void)
         T(arena_destroyed_twice),
         T(eval_after_arena_destroy),
         T(closures_of_a_destroyed_runtime),
+        T(material_destroys_keep_runtimes_and_arenas_quarantined),
+        T(arena_slot_bytes_keep_runtime_and_arena_shells_quarantined),
         T(stale_handle_after_reset),
         T(stale_handle_in_a_batch_lane),
         T(inactive_lane_handle_is_not_read),

@@ -847,10 +847,11 @@ glint_status glint_arena_reset(glint_arena *arena);
  arena or one of its closures returns `GLINT_ERROR_INVALID_HANDLE`, and destroying
  it again is ignored and leaves that message for `glint_last_error`. This holds
  while the arena is quarantined: its shell until `GLINT_QUARANTINE_SHELLS` (1024) more
- runtimes and arenas were destroyed, its closure slots while the most recently
- destroyed arenas' slots total at most `GLINT_QUARANTINE_BYTES` (16 MiB; an arena larger
- than that frees them at once). Beyond that, for pointers never returned by this
- library and for calls that race with the destroy, the behaviour is undefined.
+ runtimes and arenas were destroyed (destroying materials does not count), its
+ closure slots while its shell is and the most recently destroyed arenas' slots
+ total at most `GLINT_QUARANTINE_BYTES` (16 MiB; an arena larger than that frees
+ them at once). Beyond that, for pointers never returned by this library and for
+ calls that race with the destroy, the behaviour is undefined.
 
  # Safety
  `arena` is NULL or a handle from `glint_arena_create`.
@@ -1067,7 +1068,8 @@ glint_status glint_material_create_from_params(const glint_runtime *runtime, uin
 /*
  Destroy a material (NULL is ignored). Closures built from it stay valid. A call
  with the destroyed handle returns `GLINT_ERROR_INVALID_HANDLE` while its shell is
- quarantined (as runtimes and arenas are; see `glint_runtime_destroy`).
+ quarantined, that is until `GLINT_QUARANTINE_SHELLS` (1024) more materials were
+ destroyed (material destroys are counted apart from runtime and arena destroys).
 
  # Safety
  `material` is NULL or a handle from a material constructor.
@@ -1125,9 +1127,9 @@ glint_status glint_runtime_create(const char *config, glint_runtime **out);
  call on the destroyed runtime; destroying it again is ignored and leaves that
  message for `glint_last_error`. This holds while the handle's small shell is
  quarantined, that is until `GLINT_QUARANTINE_SHELLS` (1024) more runtimes and arenas
- were destroyed; after that, and for pointers never returned by
- `glint_runtime_create`, the behaviour is undefined, as is a call that races with
- the destroy.
+ were destroyed (destroying materials does not count); after that, and for pointers
+ never returned by `glint_runtime_create`, the behaviour is undefined, as is a call
+ that races with the destroy.
 
  # Safety
  `runtime` is NULL or a handle from `glint_runtime_create`.

@@ -255,10 +255,11 @@ pub unsafe extern "C" fn glint_arena_reset(arena: *mut glint_arena) -> glint_sta
 /// arena or one of its closures returns `GLINT_ERROR_INVALID_HANDLE`, and destroying
 /// it again is ignored and leaves that message for `glint_last_error`. This holds
 /// while the arena is quarantined: its shell until `GLINT_QUARANTINE_SHELLS` (1024) more
-/// runtimes and arenas were destroyed, its closure slots while the most recently
-/// destroyed arenas' slots total at most `GLINT_QUARANTINE_BYTES` (16 MiB; an arena larger
-/// than that frees them at once). Beyond that, for pointers never returned by this
-/// library and for calls that race with the destroy, the behaviour is undefined.
+/// runtimes and arenas were destroyed (destroying materials does not count), its
+/// closure slots while its shell is and the most recently destroyed arenas' slots
+/// total at most `GLINT_QUARANTINE_BYTES` (16 MiB; an arena larger than that frees
+/// them at once). Beyond that, for pointers never returned by this library and for
+/// calls that race with the destroy, the behaviour is undefined.
 ///
 /// # Safety
 /// `arena` is NULL or a handle from `glint_arena_create`.
@@ -286,6 +287,14 @@ pub unsafe extern "C" fn glint_arena_destroy(arena: *mut glint_arena) {
         quarantine(unsafe { Box::from_raw(arena) }, bytes);
         Ok(())
     });
+}
+
+/// Destroyed arenas wait with destroyed runtimes; their slots leave first when the
+/// slots of destroyed arenas exceed `GLINT_QUARANTINE_BYTES`.
+impl Quarantined for glint_arena {
+    fn release_slots(&mut self) {
+        self.arena.release();
+    }
 }
 
 fn transport(flags: u32) -> Result<Transport, Error> {

@@ -1,10 +1,12 @@
 //! Handle validation: every runtime, arena and closure handle carries a tag that API
 //! entry points compare (one load and one compare) and that destroy and reset poison.
 //!
-//! - Runtime and arena handles point to small shells. Destroy frees what they own,
-//!   poisons the tag and parks the shell in a bounded global [quarantine], so a
-//!   destroyed handle stays readable (and reads as destroyed) for a while instead of
-//!   becoming freed memory at once.
+//! - Runtime, arena and material handles point to small shells. Destroy frees what
+//!   they own, poisons the tag and parks the shell in a bounded global [quarantine],
+//!   so a destroyed handle stays readable (and reads as destroyed) for a while instead
+//!   of becoming freed memory at once. Runtimes and arenas share one queue, materials
+//!   have their own, and destroyed arenas' closure slots leave by their own byte bound
+//!   (their shells stay): destroys of one kind never free another kind's shell early.
 //! - A closure handle is the address of its arena slot with the arena's generation in
 //!   the 16 high bits, which x86-64 and AArch64 user-space addresses leave zero. The
 //!   slot's tag holds the generation it was built in, `glint_arena_reset` poisons the
@@ -18,11 +20,14 @@
 //!   them opaque (cbindgen.toml).
 //!
 //! What stays undefined: pointers this library never returned; a destroyed runtime or
-//! arena handle used after [`GLINT_QUARANTINE_SHELLS`] more runtimes and arenas were
-//! destroyed (its shell is then freed); closures of a destroyed arena whose slots
-//! exceeded [`GLINT_QUARANTINE_BYTES`] or left the quarantine; a handle from exactly a
-//! multiple of 65536 resets ago whose slot was reused; and calls that race with the
-//! destroy or reset of the handle they use.
+//! arena handle, or a material or closure of a destroyed runtime, used after
+//! [`GLINT_QUARANTINE_SHELLS`] more runtimes and arenas were destroyed (material
+//! destroys do not count; the shell is then freed); a destroyed material used after
+//! [`GLINT_QUARANTINE_SHELLS`] more materials were destroyed; closures of a destroyed
+//! arena whose slots exceeded [`GLINT_QUARANTINE_BYTES`] or left the quarantine (by
+//! bytes, or with the arena's shell); a handle from exactly a multiple of 65536
+//! resets ago whose slot was reused; and calls that race with the destroy or reset of
+//! the handle they use.
 
 use super::*;
 use std::any::Any;
@@ -165,43 +170,112 @@ fn closure_tag_error(tag: u64, what: &str) -> Error {
     }
 }
 
-/// A destroyed runtime or arena shell, kept readable while quarantined, with the
-/// bytes of closure slots it keeps.
+/// The quarantine queue a destroyed shell waits in. Each counts only destroys of its
+/// own kinds, so that churning materials never frees a destroyed runtime's shell (its
+/// materials and closures read it) before [`GLINT_QUARANTINE_SHELLS`] more runtimes
+/// and arenas were destroyed, as `glint_runtime_destroy` documents.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Queue {
+    /// Runtimes and arenas: the last [`GLINT_QUARANTINE_SHELLS`] of them.
+    RuntimesAndArenas,
+    /// Materials: the last [`GLINT_QUARANTINE_SHELLS`] of them.
+    Materials,
+}
+
+/// A destroyed handle shell that the quarantine can park.
+pub(crate) trait Quarantined: Any {
+    /// The queue it waits in.
+    fn queue(&self) -> Queue {
+        Queue::RuntimesAndArenas
+    }
+
+    /// Free the closure slots it keeps (an arena's; the bytes it was parked with),
+    /// keeping the shell itself readable.
+    fn release_slots(&mut self) {}
+}
+
+/// A destroyed shell, kept readable while quarantined, with the bytes of closure
+/// slots it still keeps.
 struct Parked {
-    _shell: Box<dyn Any>,
+    shell: Box<dyn Quarantined>,
     bytes: usize,
 }
 
 struct Quarantine {
+    /// Destroyed runtimes and arenas, oldest first.
     shells: VecDeque<Parked>,
+    /// The closure slot bytes `shells` keep.
     bytes: usize,
+    /// Destroyed materials, oldest first.
+    materials: VecDeque<Box<dyn Quarantined>>,
 }
 
 // SAFETY: quarantined shells are dead: no thread uses them through the API (a use is
-// a read of their poisoned tag), and the quarantine only drops them.
+// a read of their poisoned tag), and the quarantine only frees their slots or drops them.
 unsafe impl Send for Quarantine {}
 
-/// Reachable from a global, so leak checkers count parked shells as still reachable.
-static QUARANTINE: Mutex<Quarantine> = Mutex::new(Quarantine {
-    shells: VecDeque::new(),
-    bytes: 0,
-});
-
-/// Park a destroyed shell that keeps `bytes` of closure slots; the oldest leave
-/// (and are freed) beyond the bounds.
-pub(crate) fn quarantine(shell: Box<dyn Any>, bytes: usize) {
-    let mut q = QUARANTINE.lock().unwrap_or_else(|e| e.into_inner());
-    q.bytes += bytes;
-    q.shells.push_back(Parked {
-        _shell: shell,
-        bytes,
-    });
-    while q.shells.len() > GLINT_QUARANTINE_SHELLS || q.bytes > GLINT_QUARANTINE_BYTES {
-        let Some(old) = q.shells.pop_front() else {
-            break;
-        };
-        q.bytes -= old.bytes;
+impl Quarantine {
+    const fn new() -> Self {
+        Quarantine {
+            shells: VecDeque::new(),
+            bytes: 0,
+            materials: VecDeque::new(),
+        }
     }
+
+    /// Park `shell`, keeping `bytes` of closure slots (at most
+    /// [`GLINT_QUARANTINE_BYTES`]), and apply the bounds: beyond
+    /// [`GLINT_QUARANTINE_BYTES`] the oldest shells' slots are freed (the shells
+    /// stay), beyond [`GLINT_QUARANTINE_SHELLS`] in its queue the oldest shell of that
+    /// queue is freed. Returns what leaves, for the caller to drop.
+    fn park(&mut self, shell: Box<dyn Quarantined>, bytes: usize) -> Vec<Box<dyn Quarantined>> {
+        let mut leaving = Vec::new();
+        match shell.queue() {
+            Queue::Materials => {
+                self.materials.push_back(shell);
+                while self.materials.len() > GLINT_QUARANTINE_SHELLS {
+                    leaving.extend(self.materials.pop_front());
+                }
+            }
+            Queue::RuntimesAndArenas => {
+                self.bytes += bytes;
+                self.shells.push_back(Parked { shell, bytes });
+                for old in &mut self.shells {
+                    if self.bytes <= GLINT_QUARANTINE_BYTES {
+                        break;
+                    }
+                    if old.bytes > 0 {
+                        old.shell.release_slots();
+                        self.bytes -= old.bytes;
+                        old.bytes = 0;
+                    }
+                }
+                while self.shells.len() > GLINT_QUARANTINE_SHELLS {
+                    let Some(old) = self.shells.pop_front() else {
+                        break;
+                    };
+                    self.bytes -= old.bytes;
+                    leaving.push(old.shell);
+                }
+            }
+        }
+        leaving
+    }
+}
+
+/// Reachable from a global, so leak checkers count parked shells as still reachable.
+static QUARANTINE: Mutex<Quarantine> = Mutex::new(Quarantine::new());
+
+/// Park a destroyed shell that keeps `bytes` of closure slots (at most
+/// [`GLINT_QUARANTINE_BYTES`]) in its [`Queue`]; the oldest of that queue leave (and
+/// are freed) beyond [`GLINT_QUARANTINE_SHELLS`], the oldest slots beyond
+/// [`GLINT_QUARANTINE_BYTES`].
+pub(crate) fn quarantine(shell: Box<dyn Quarantined>, bytes: usize) {
+    let leaving = QUARANTINE
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .park(shell, bytes);
+    drop(leaving);
 }
 
 #[cfg(test)]
@@ -237,14 +311,67 @@ mod tests {
         }
     }
 
+    struct Shell {
+        queue: Queue,
+        released: bool,
+    }
+
+    impl Quarantined for Shell {
+        fn queue(&self) -> Queue {
+            self.queue
+        }
+
+        fn release_slots(&mut self) {
+            self.released = true;
+        }
+    }
+
+    fn shell(queue: Queue) -> Box<Shell> {
+        Box::new(Shell {
+            queue,
+            released: false,
+        })
+    }
+
+    fn released(p: &Parked) -> bool {
+        (p.shell.as_ref() as &dyn Any)
+            .downcast_ref::<Shell>()
+            .unwrap()
+            .released
+    }
+
     #[test]
     fn the_quarantine_keeps_its_bounds() {
+        let mut q = Quarantine::new();
         for _ in 0..GLINT_QUARANTINE_SHELLS + 10 {
-            quarantine(Box::new(0u8), GLINT_QUARANTINE_BYTES / 4);
+            q.park(shell(Queue::RuntimesAndArenas), GLINT_QUARANTINE_BYTES / 4);
+            q.park(shell(Queue::Materials), 0);
         }
-        let q = QUARANTINE.lock().unwrap();
-        assert!(q.shells.len() <= GLINT_QUARANTINE_SHELLS);
+        assert_eq!(q.shells.len(), GLINT_QUARANTINE_SHELLS);
+        assert_eq!(q.materials.len(), GLINT_QUARANTINE_SHELLS);
         assert!(q.bytes <= GLINT_QUARANTINE_BYTES);
         assert_eq!(q.bytes, q.shells.iter().map(|p| p.bytes).sum::<usize>());
+        assert!(q.shells.iter().all(|p| released(p) == (p.bytes == 0)));
+    }
+
+    #[test]
+    fn only_runtime_and_arena_destroys_free_their_shells() {
+        let mut q = Quarantine::new();
+        q.park(shell(Queue::RuntimesAndArenas), 0);
+        for _ in 0..GLINT_QUARANTINE_SHELLS * 2 {
+            assert!(q.park(shell(Queue::Materials), 0).len() <= 1);
+        }
+        // Slots beyond the byte bound leave; the shells stay.
+        for _ in 0..8 {
+            q.park(shell(Queue::RuntimesAndArenas), GLINT_QUARANTINE_BYTES / 2);
+        }
+        assert_eq!(q.shells.len(), 9);
+        assert_eq!(q.bytes, GLINT_QUARANTINE_BYTES);
+        assert_eq!(q.shells.iter().filter(|p| released(p)).count(), 6);
+        for k in 9..GLINT_QUARANTINE_SHELLS {
+            assert!(q.park(shell(Queue::RuntimesAndArenas), 0).is_empty(), "{k}");
+        }
+        assert_eq!(q.park(shell(Queue::RuntimesAndArenas), 0).len(), 1);
+        assert_eq!(q.shells.len(), GLINT_QUARANTINE_SHELLS);
     }
 }

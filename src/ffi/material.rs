@@ -22,6 +22,14 @@ pub struct glint_material {
 }
 const _: () = assert!(std::mem::offset_of!(glint_material, tag) == 0);
 
+/// Destroyed materials wait in their own queue, so that destroying many never frees
+/// the shell of a destroyed runtime early.
+impl Quarantined for glint_material {
+    fn queue(&self) -> Queue {
+        Queue::Materials
+    }
+}
+
 /// A live material and its live runtime.
 ///
 /// # Safety
@@ -450,7 +458,8 @@ pub unsafe extern "C" fn glint_material_create_from_params(
 
 /// Destroy a material (NULL is ignored). Closures built from it stay valid. A call
 /// with the destroyed handle returns `GLINT_ERROR_INVALID_HANDLE` while its shell is
-/// quarantined (as runtimes and arenas are; see `glint_runtime_destroy`).
+/// quarantined, that is until `GLINT_QUARANTINE_SHELLS` (1024) more materials were
+/// destroyed (material destroys are counted apart from runtime and arena destroys).
 ///
 /// # Safety
 /// `material` is NULL or a handle from a material constructor.

@@ -32,6 +32,9 @@ pub struct glint_runtime {
 }
 const _: () = assert!(std::mem::offset_of!(glint_runtime, tag) == 0);
 
+/// Destroyed runtimes wait with destroyed arenas.
+impl Quarantined for glint_runtime {}
+
 /// What a live runtime owns: the registry and settings. Read-only after setup.
 pub(crate) struct LiveRuntime {
     pub(crate) runtime: Runtime,
@@ -419,9 +422,9 @@ pub unsafe extern "C" fn glint_runtime_create(
 /// call on the destroyed runtime; destroying it again is ignored and leaves that
 /// message for `glint_last_error`. This holds while the handle's small shell is
 /// quarantined, that is until `GLINT_QUARANTINE_SHELLS` (1024) more runtimes and arenas
-/// were destroyed; after that, and for pointers never returned by
-/// `glint_runtime_create`, the behaviour is undefined, as is a call that races with
-/// the destroy.
+/// were destroyed (destroying materials does not count); after that, and for pointers
+/// never returned by `glint_runtime_create`, the behaviour is undefined, as is a call
+/// that races with the destroy.
 ///
 /// # Safety
 /// `runtime` is NULL or a handle from `glint_runtime_create`.
