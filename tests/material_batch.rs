@@ -962,8 +962,8 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
 fn a_value_overridden_twice_checks_both_overrides() {
     use glint::params::ParamKind;
     let registry = Registry::with_builtins();
-    let material = glint::json::material_from_json(&registry, r#"{"material": "disney"}"#, 1e-3)
-        .unwrap();
+    let material =
+        glint::json::material_from_json(&registry, r#"{"material": "disney"}"#, 1e-3).unwrap();
     let n = 37;
     let mut rng = Rng::new(0xd0b1);
     let (normal, wo) = normals_and_views(&mut rng, n);

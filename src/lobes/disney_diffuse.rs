@@ -35,7 +35,7 @@
 //! Its estimate (lobe selection and pruning) keeps the `Fd` part's closed form, which
 //! is cheap, and replaces the subsurface part's logarithm and quadrature by a fit:
 //! quadratic in roughness (as the closed form is) with coefficients of degree 8 in
-//! `sqrt(cos_o)` ([`SS_FIT`]): no table, no gather.
+//! `sqrt(cos_o)`, centered ([`SS_FIT`]): no table, no gather.
 
 use super::lambert::cosine_hemisphere;
 use super::{
@@ -361,9 +361,11 @@ impl Model for DisneyDiffuse {
         // Without subsurface (most materials) the blend is `a_d * 1 + a_ss * 0`, `a_d`'s
         // bits: the fit's 27 coefficients are skipped.
         let total = if s.gt(L::zero()).any() {
-            let m = a.sqrt();
+            // `2 sqrt(cos_o) - 1` as one multiply-add: the same rounding (doubling is
+            // exact).
+            let t = a.sqrt().mul_add(L::splat(2.0), -L::one());
             let [c0, c1, c2] = SS_FIT;
-            let a_ss = estrin9(m, c0) + r * (estrin9(m, c1) + r * estrin9(m, c2));
+            let a_ss = estrin9(t, c0) + r * (estrin9(t, c1) + r * estrin9(t, c2));
             a_d * (L::one() - s) + a_ss * s
         } else {
             a_d
@@ -387,41 +389,50 @@ fn polynomial_moments<L: Lane>() -> ([L; 2], [L; 3]) {
 }
 
 /// The subsurface shape's albedo (white base color) is `c0 + c1 r + c2 r^2` in the
-/// roughness `r`; each `c` as a polynomial in `sqrt(cos_o)`, highest degree first
-/// (least squares of the relative error against `albedo` over 257 `cos_o` from 1e-8 to
-/// 1 and 33 roughnesses: worst 2.8e-4).
+/// roughness `r`; each `c` as a polynomial in `t = 2 sqrt(cos_o) - 1`, highest degree
+/// first (least squares of the relative error against `albedo` over 257 `cos_o` from
+/// 1e-8 to 1 and 33 roughnesses: worst 2.8e-4).
+///
+/// Centered because the SIMD lanes' multiply-adds are fused and the scalar lane's are
+/// not, and a material batch (SIMD) must select lobes as its lane's closure (scalar)
+/// does. In powers of `sqrt(cos_o)` on [0, 1] the same polynomials have coefficients up
+/// to 152, whose terms sum to 700 in magnitude for an albedo of 0.76 (roughness 1,
+/// `cos_o = 1`): that cancellation put the lanes 2.6e-5 apart. On [-1, 1] the terms
+/// sum to at most 8.5 times the albedo, and the lanes agree within 5e-7
+/// (tests/lobe_disney_diffuse.rs). The coefficients are those polynomials rewritten
+/// exactly in `t`, then rounded to f32 (which moves the fit by at most 1e-7).
 const SS_FIT: [[f32; 9]; 3] = [
     [
-        -7.0027804e0,
-        4.903214e1,
-        -1.2632762e2,
-        1.5217728e2,
-        -8.079547e1,
-        6.123923e0,
-        6.896024e0,
-        2.047224e-2,
-        6.2482375e-1,
+        -2.7354611e-2,
+        1.642267e-1,
+        -5.8353104e-2,
+        -5.751976e-1,
+        6.123489e-1,
+        5.20007e-1,
+        -1.0520557e0,
+        -4.705534e-2,
+        1.2122191e0,
     ],
     [
-        -6.8930286e-1,
-        -5.119741e0,
-        2.7818172e1,
-        -4.4898827e1,
-        2.7074106e1,
-        4.3268514e-1,
-        -5.360101e0,
-        1.0162942e-2,
-        7.4390906e-1,
+        -2.6925893e-3,
+        -6.153869e-2,
+        7.928061e-2,
+        2.1412283e-1,
+        -3.9183626e-1,
+        -6.58064e-2,
+        5.486723e-1,
+        -4.532002e-1,
+        1.4406255e-1,
     ],
     [
-        -4.0131755e0,
-        1.922453e1,
-        -3.9447266e1,
-        4.55504e1,
-        -3.242857e1,
-        1.4133748e1,
-        -3.0614347e0,
-        -1.0242605e-1,
-        1.441599e-1,
+        -1.5676467e-2,
+        2.47799e-2,
+        -3.96315e-3,
+        1.4110357e-3,
+        4.3660216e-3,
+        -5.4369435e-2,
+        7.8213476e-2,
+        -4.3918803e-2,
+        9.122716e-3,
     ],
 ];
