@@ -866,7 +866,8 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
                 tangent: tangents.then(|| soa(&tangent)),
                 overrides: &overrides,
             };
-            for kernels in Kernels::available() {
+            let runs = Kernels::available().into_iter();
+            for (kernels, reverse) in runs.flat_map(|k| [(k, false), (k, true)]) {
                 let exec = Exec {
                     kernels,
                     threads: Threads::Caller,
@@ -875,6 +876,8 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
                 let (mut all, mut albedo) = (fill(n * k), fill(n));
                 let [r, g, b, p] = &mut all;
                 let [ar, ag, ab, _] = &mut albedo;
+                // With the reverse pdf, direction by direction over the slots' rows.
+                let mut rev = reverse.then(|| vec![-7.0f32; n * k]);
                 let result = material::eval_directions(
                     &exec,
                     &input,
@@ -883,7 +886,7 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
                     EvalOutput {
                         value: Soa3Mut { x: r, y: g, z: b },
                         pdf: p,
-                        pdf_reverse: None,
+                        pdf_reverse: rev.as_deref_mut(),
                     },
                     Some(Soa3Mut {
                         x: ar,
@@ -898,6 +901,7 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
                     let wi_d = [0, 1, 2].map(|c| wi[c][at.clone()].to_vec());
                     let mut one = fill(n);
                     let [r, g, b, p] = &mut one;
+                    let mut rev_one = reverse.then(|| vec![-7.0f32; n]);
                     let alone = material::eval(
                         &exec,
                         &input,
@@ -905,9 +909,13 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
                         EvalOutput {
                             value: Soa3Mut { x: r, y: g, z: b },
                             pdf: p,
-                            pdf_reverse: None,
+                            pdf_reverse: rev_one.as_deref_mut(),
                         },
                     );
+                    if let (Some(all), Some(one)) = (&rev, &rev_one) {
+                        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                        assert_eq!(bits(&all[at.clone()]), bits(one), "reverse pdf, {d}");
+                    }
                     errors.push(alone.err().map(|e| e.message.to_string()));
                     for (c, row) in one.iter().enumerate() {
                         let got = &all[c][at.clone()];
