@@ -958,11 +958,15 @@ impl State {
                     } else {
                         null_mut()
                     },
+                    direction_count: 1,
+                    albedo_r: o5.as_mut_ptr(),
+                    albedo_g: o6.as_mut_ptr(),
+                    albedo_b: o7.as_mut_ptr(),
                 };
                 // SAFETY: every array holds `n` elements; the material NULL, live or
                 // quarantined.
                 let st = unsafe { glint_material_eval_batch(&args) };
-                let mut checked: Vec<&[f32]> = vec![o0, o1, o2, o3];
+                let mut checked: Vec<&[f32]> = vec![o0, o1, o2, o3, o5, o6, o7];
                 if pdf_reverse {
                     checked.push(o4);
                 }
