@@ -152,10 +152,7 @@ fn failing_lanes_are_zeroed_and_the_rest_match_their_closures() {
     let description = r#"{"material": "disney", "metallic": 0.4, "clearcoat": 0.7,
         "sheen": 0.5, "anisotropic": 0.6, "subsurface": 0.3}"#;
     let material = glint::json::material_from_json(&registry, description, 1e-3).unwrap();
-    let index = |name: &str| {
-        let specs = material.kind().params();
-        specs.iter().position(|s| s.name == name).unwrap() as u32
-    };
+    let index = |name: &str| common::param_index(&material, name);
     let n = 300;
     let mut rng = Rng::new(0xfa11);
     let (normal, wo) = normals_and_views(&mut rng, n);
@@ -353,10 +350,7 @@ fn matches_closures(
     use glint::params::ParamKind;
     let registry = Registry::with_builtins();
     let material = glint::json::material_from_json(&registry, description, prune).unwrap();
-    let index = |name: &str| {
-        let specs = material.kind().params();
-        specs.iter().position(|s| s.name == name).unwrap() as u32
-    };
+    let index = |name: &str| common::param_index(&material, name);
     let mut rng = Rng::new(seed);
     let (normal, wo) = normals_and_views(&mut rng, n);
     let tangent = tangents(&mut rng, n, 2);
@@ -822,10 +816,7 @@ fn several_directions_and_the_albedo_are_each_call_alone() {
     let description = r#"{"material": "disney", "metallic": 0.3, "clearcoat": 0.8,
         "sheen": 0.6, "anisotropic": 0.5, "subsurface": 0.4}"#;
     let material = glint::json::material_from_json(&registry, description, 1e-3).unwrap();
-    let index = |name: &str| {
-        let specs = material.kind().params();
-        specs.iter().position(|s| s.name == name).unwrap() as u32
-    };
+    let index = |name: &str| common::param_index(&material, name);
     let (n, k) = (613, 3);
     let mut rng = Rng::new(0xd1ec);
     let (normal, wo) = normals_and_views(&mut rng, n);

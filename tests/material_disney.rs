@@ -342,8 +342,7 @@ fn hostile_geometry_is_finite_and_follows_the_2012_brdf() {
 /// colors as per-lane overrides gives each lane its closure's eval.
 #[test]
 fn tiny_base_colors_keep_their_hue() {
-    use glint::batch::material::{self, MaterialInput, OverrideLanes};
-    use glint::batch::{EvalOutput, Exec, Threads};
+    use glint::batch::material::{MaterialInput, OverrideLanes};
     let registry = registry();
     let tinted = Disney {
         base_color: [0.0; 3],
@@ -421,18 +420,7 @@ fn tiny_base_colors_keep_their_hue() {
         overrides: &overrides,
     };
     for kernels in glint::simd::Kernels::available() {
-        let exec = Exec {
-            kernels,
-            threads: Threads::Caller,
-        };
-        let mut value = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
-        let mut pdf = vec![0.0f32; n];
-        let out = EvalOutput {
-            value: common::soa_mut(&mut value),
-            pdf: &mut pdf,
-            pdf_reverse: None,
-        };
-        material::eval(&exec, &input, common::soa(&wi), out).unwrap();
+        let (value, pdf) = common::material_eval(kernels, &input, common::soa(&wi));
         for (lane, e) in want.iter().enumerate() {
             let got = [value[0][lane], value[1][lane], value[2][lane], pdf[lane]];
             let want = [e.value.r, e.value.g, e.value.b, e.pdf];
@@ -848,8 +836,7 @@ fn samples_are_valued_at_the_direction_returned() {
 /// cancelled). No pruning, so both keep every lobe.
 #[test]
 fn batch_pdf_with_subsurface_is_the_closures() {
-    use glint::batch::material::{self, MaterialInput, OverrideLanes};
-    use glint::batch::{EvalOutput, Exec, Threads};
+    use glint::batch::material::{MaterialInput, OverrideLanes};
     use glint::verify::BATCH_TOLERANCE;
     let registry = registry();
     let d = Disney {
@@ -866,10 +853,7 @@ fn batch_pdf_with_subsurface_is_the_closures() {
         clearcoat_gloss: 0.0,
     };
     let m = material(&registry, &d, 0.0);
-    let index = |name: &str| {
-        let specs = m.kind().params();
-        specs.iter().position(|s| s.name == name).unwrap() as u32
-    };
+    let index = |name: &str| common::param_index(&m, name);
     let unit = |v: Vec3<f32>| Vec3::try_unit(v.x, v.y, v.z, "w").unwrap();
     let n = 2048;
     let mut rng = Rng::new(0x55bd);
@@ -916,18 +900,7 @@ fn batch_pdf_with_subsurface_is_the_closures() {
         overrides: &overrides,
     };
     for kernels in glint::simd::Kernels::available() {
-        let exec = Exec {
-            kernels,
-            threads: Threads::Caller,
-        };
-        let mut value = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
-        let mut pdf = vec![0.0f32; n];
-        let out = EvalOutput {
-            value: common::soa_mut(&mut value),
-            pdf: &mut pdf,
-            pdf_reverse: None,
-        };
-        material::eval(&exec, &input, common::soa(&wi), out).unwrap();
+        let (_, pdf) = common::material_eval(kernels, &input, common::soa(&wi));
         let worst = (0..n)
             .map(|i| (f64::from((pdf[i] - want[i]).abs() / want[i].max(1e-30)), i))
             .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });

@@ -303,3 +303,34 @@ impl Outputs {
         }
     }
 }
+
+/// The schema index of material parameter `name`.
+pub fn param_index(material: &glint::materials::Material, name: &str) -> u32 {
+    let specs = material.kind().params();
+    specs
+        .iter()
+        .position(|s| s.name == name)
+        .expect("a parameter of the material") as u32
+}
+
+/// A material batch's eval (value rows, pdf) of `input`'s lanes at `wi` on `kernels`.
+pub fn material_eval(
+    kernels: Kernels,
+    input: &batch::material::MaterialInput<'_>,
+    wi: Soa3<'_>,
+) -> ([Vec<f32>; 3], Vec<f32>) {
+    let n = input.count;
+    let exec = Exec {
+        kernels,
+        threads: Threads::Caller,
+    };
+    let mut value = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
+    let mut pdf = vec![0.0f32; n];
+    let out = EvalOutput {
+        value: soa_mut(&mut value),
+        pdf: &mut pdf,
+        pdf_reverse: None,
+    };
+    batch::material::eval(&exec, input, wi, out).expect("a valid batch");
+    (value, pdf)
+}
