@@ -647,6 +647,11 @@ static void several_directions_in_one_call(void **state)
     assert_error_mentions("direction 1, lane 4");
     assert_true(all[3 * K * N + N + 4] == 0.0f && all[3 * K * N + 4] >= 0.0f);
     assert_true(all[3 * K * N + 2 * N + 4] >= 0.0f);
+    /* A lane's own input fails it in every direction: the error names no direction. */
+    d->normal[1][2] = NAN;
+    check_error(fx, glint_material_eval_batch(&e), GLINT_ERROR_INVALID_ARGUMENT);
+    assert_error_mentions("lane 2: normal");
+    assert_null(strstr(glint_last_error(), "direction"));
     free(wi);
     free(all);
     free(d);

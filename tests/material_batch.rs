@@ -1037,3 +1037,151 @@ fn a_value_overridden_twice_checks_both_overrides() {
         }
     }
 }
+
+/// Tangent frames built in the one-pass (raw) path equal the staged path's
+/// (`Frame::new` lane by lane), to the bit, on every ISA, for evals (two directions
+/// and the albedo), pdfs, samples and albedos: a host's tangents (60 to 90 degrees off
+/// the normal, unnormalized, some of length 1e-11), automatic ones (zero and -0), and
+/// in the last chunk lanes the raw path leaves to the staged one (a tangent within 30
+/// degrees of the normal or along it, of length 1e13); with a NaN tangent, the same
+/// error. Staging is forced by overriding the roughness twice with the same row.
+#[test]
+fn tangent_frames_in_one_pass_equal_the_staged_ones() {
+    use glint::params::ParamKind;
+    let registry = Registry::with_builtins();
+    let description = r#"{"material": "disney", "metallic": 0.2, "clearcoat": 0.7,
+        "sheen": 0.5, "anisotropic": 0.8, "subsurface": 0.3}"#;
+    let material = glint::json::material_from_json(&registry, description, 1e-3).unwrap();
+    let n = 301;
+    let mut rng = Rng::new(0x7a9e);
+    let (normal, wo) = normals_and_views(&mut rng, n);
+    let mut tangent = tangents(&mut rng, n, 3);
+    for (i, t) in tangent.iter_mut().enumerate() {
+        let nrm = normal[i];
+        // A host's tangents: off the normal by more than 30 degrees (else f64, staged).
+        let across = (*t - nrm * nrm.dot(*t)).normalize();
+        if t.length_squared() > 0.0 {
+            *t = across + nrm * (rng.f32() - 0.5);
+        }
+        *t = match i % 31 {
+            1 => *t * 7.5,
+            4 => Vec3::new(-0.0, 0.0, -0.0),
+            // In the last chunk only (lanes 256 on; the one-pass path leaves the chunk
+            // to the staged one): 10 degrees off the normal, along it, length 1e13.
+            7 if i >= 256 => nrm + across * 0.176,
+            10 if i >= 256 => nrm,
+            13 if i >= 256 => *t * 1e13,
+            16 => *t * 1e-11,
+            _ => *t,
+        };
+    }
+    let wi: Vec<Vec3<f32>> = (0..2 * n).map(|_| sphere(&mut rng)).collect();
+    let rough: Vec<f32> = (0..n).map(|_| rng.f32()).collect();
+    let u = [0; 3].map(|_| (0..n).map(|_| rng.f32()).collect::<Vec<f32>>());
+    let (wo, wi, normal, mut tangent) = (rows(&wo), rows(&wi), rows(&normal), rows(&tangent));
+    let roughness = material::OverrideLanes {
+        param: common::param_index(&material, "roughness"),
+        kind: ParamKind::Float,
+        value: [&rough, &rough, &rough],
+    };
+    let twice = [roughness, roughness];
+    type Outputs = (Option<String>, Vec<Vec<u32>>);
+    let run = |exec: &Exec<'_>, input: &MaterialInput<'_>| -> Outputs {
+        let fill = |len: usize| [0; 4].map(|_| vec![-7.0f32; len]);
+        let (mut e, mut albedo) = (fill(2 * n), fill(n));
+        let [r, g, b, p] = &mut e;
+        let [ar, ag, ab, _] = &mut albedo;
+        let mut errors = vec![material::eval_directions(
+            exec,
+            input,
+            soa(&wi),
+            2,
+            EvalOutput {
+                value: Soa3Mut { x: r, y: g, z: b },
+                pdf: p,
+                pdf_reverse: None,
+            },
+            Some(Soa3Mut {
+                x: ar,
+                y: ag,
+                z: ab,
+            }),
+        )];
+        let [r, g, b, p] = &mut albedo;
+        errors.push(material::albedo(exec, input, Soa3Mut { x: r, y: g, z: b }));
+        let one: [Vec<f32>; 3] = [0, 1, 2].map(|c| wi[c][..n].to_vec());
+        errors.push(material::pdf(exec, input, soa(&one), p));
+        let (mut s_wi, mut weight) = (fill(n), fill(n));
+        let [x, y, z, pdf] = &mut s_wi;
+        let [wr, wg, wb, eta] = &mut weight;
+        let (mut flags, mut component) = (vec![99u32; n], vec![99u32; n]);
+        errors.push(material::sample(
+            exec,
+            input,
+            SampleRandoms {
+                u_lobe: &u[0],
+                u0: &u[1],
+                u1: &u[2],
+            },
+            SampleOutput {
+                wi: Soa3Mut { x, y, z },
+                pdf,
+                weight: Soa3Mut {
+                    x: wr,
+                    y: wg,
+                    z: wb,
+                },
+                value: None,
+                flags: Some(&mut flags),
+                lobe: None,
+                component: Some(&mut component),
+                eta: Some(eta),
+                roughness: None,
+            },
+        ));
+        let message = errors
+            .into_iter()
+            .find_map(|r| r.err().map(|e| e.message.into_owned()));
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+        let mut out: Vec<Vec<u32>> = e
+            .iter()
+            .chain(&albedo)
+            .chain(&s_wi)
+            .map(|v| bits(v))
+            .collect();
+        out.extend(weight.iter().map(|v| bits(v)));
+        out.extend([flags, component]);
+        (message, out)
+    };
+    for hostile in [false, true] {
+        if hostile {
+            tangent[1][200] = f32::NAN;
+        }
+        for kernels in Kernels::available() {
+            let exec = Exec {
+                kernels,
+                threads: Threads::Caller,
+            };
+            let input = |overrides| MaterialInput {
+                count: n,
+                material: &material,
+                active: None,
+                wo: soa(&wo),
+                normal: soa(&normal),
+                tangent: Some(soa(&tangent)),
+                overrides,
+            };
+            let (raw, staged) = (run(&exec, &input(&twice[..1])), run(&exec, &input(&twice)));
+            let what = format!("{kernels:?}, hostile {hostile}");
+            assert_eq!(raw.0, staged.0, "{what}");
+            if hostile {
+                let e = raw.0.as_deref().unwrap_or("");
+                assert!(e.starts_with("lane 200: tangent"), "{what}: {e}");
+            }
+            for (k, (a, b)) in raw.1.iter().zip(&staged.1).enumerate() {
+                let lane = a.iter().zip(b).position(|(a, b)| a != b);
+                assert_eq!(lane, None, "{what}: output {k} differs at that lane");
+            }
+        }
+    }
+}

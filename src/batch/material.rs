@@ -872,23 +872,24 @@ fn eval_block(
         })
     })?;
     // The lowest failing lane; in a lane, its own inputs' error before its `wi`'s.
-    let lane_level = lane_errors.lane().map(|lane| (lane, 0, 0));
+    let lane_level = lane_errors.lane().map(|lane| (lane, None));
     let first = failures
         .iter()
         .enumerate()
-        .filter_map(|(d, f)| f.lane().map(|lane| (lane, d, 1)))
+        .filter_map(|(d, f)| f.lane().map(|lane| (lane, Some(d))))
         .chain(lane_level)
-        .min();
+        .min_by_key(|&(lane, d)| (lane, d.is_some()));
     let (d, error) = match first {
         None => return Ok(()),
-        Some((_, d, 0)) => (d, lane_errors.take()),
-        Some((_, d, _)) => (d, failures[d].take()),
+        Some((_, None)) => (None, lane_errors.take()),
+        Some((_, Some(d))) => (Some(d), failures[d].take()),
     };
     let e = error.expect("a failing lane has an error");
-    Err(if directions > 1 {
-        Error::new(e.status, format!("direction {d}, {}", e.message))
-    } else {
-        e
+    // A `wi`'s error names its direction (when there are several); a lane's own
+    // inputs' error belongs to every direction.
+    Err(match d {
+        Some(d) if directions > 1 => Error::new(e.status, format!("direction {d}, {}", e.message)),
+        _ => e,
     })
 }
 
@@ -971,8 +972,8 @@ fn scatter_direction(
 
 /// The caller's lanes of a chunk of consecutive lanes, and each overridden value's
 /// row in `overrides`, when the chunk can be taken from the caller's arrays as they
-/// are ([`ExpandLanes::Raw`]): not with tangents (their frames are built lane by lane),
-/// enum overrides (checked lane by lane) or a value overridden twice.
+/// are ([`ExpandLanes::Raw`]): not with enum overrides (checked lane by lane) or a value
+/// overridden twice.
 fn raw_lanes<'a>(
     input: &MaterialInput<'a>,
     lanes: &[u32],
@@ -993,7 +994,7 @@ fn raw_range<'a>(
     lanes: Range<usize>,
     overrides: &mut [Option<RawValue<'a>>],
 ) -> Option<Range<usize>> {
-    if input.tangent.is_some() || input.overrides.iter().any(|o| o.kind == ParamKind::Enum) {
+    if input.overrides.iter().any(|o| o.kind == ParamKind::Enum) {
         return None;
     }
     let specs = input.material.kind().params();
@@ -1031,6 +1032,7 @@ fn raw_expand_lanes<'a>(
         count: lanes.len(),
         overrides,
         normal: caller_rows(input.normal, lanes),
+        tangent: input.tangent.map(|t| caller_rows(t, lanes)),
         wo: caller_rows(input.wo, lanes),
     }
 }

@@ -20,7 +20,7 @@ use crate::materials::compiled::{DecodedBlock, MAX_MATERIAL_PARAMS};
 use crate::materials::{
     Context, Expansion, MAX_SLOT_PARAMS, MAX_SLOTS, MaterialModel, SlotModels, SlotVisitor,
 };
-use crate::math::frame::duff_axes;
+use crate::math::frame::{duff_axes, separated_tangent};
 use crate::math::lane::MAX_LANES;
 use crate::math::{Lane, LaneFrame, Mask, Rgb, Vec3};
 use crate::params::block_size;
@@ -91,16 +91,39 @@ pub enum ExpandLanes<'a> {
     },
     /// The caller's arrays from a chunk's first lane (`count` lanes; the registers
     /// past them see the staged path's padding), taken as the staged path takes them:
-    /// `wo`, the normal and an eval's `wi` normalized in the kernel
-    /// ([`super::Directions::Raw`]), each lane's frame from its normal (`Frame::new`
-    /// without a tangent), override values checked against their range.
+    /// `wo`, the normal, the tangent and an eval's `wi` normalized in the kernel
+    /// ([`super::Directions::Raw`]), each lane's frame from its normal and tangent
+    /// (`Frame::new`; a tangent it would take in f64 is out of range here), override
+    /// values checked against their range.
     Raw {
         count: usize,
         /// Value `p`'s row and range where an override sets it (one entry per value).
         overrides: &'a [Option<RawValue<'a>>],
         normal: [&'a [f32]; 3],
+        /// The caller's tangents (all zero on a lane: chosen from the normal), or none.
+        tangent: Option<[&'a [f32]; 3]>,
         wo: [&'a [f32]; 3],
     },
+}
+
+/// Tangent and bitangent of unit normals `n` and a caller's tangents `given` (padding
+/// zero), as `Frame::new` of the tangent `Vec3::try_unit` makes of it: chosen from the
+/// normal where a tangent is all zero; the lanes where the tangent is outside what
+/// `Vec3::try_unit` and the f32 Gram-Schmidt take are out of range (the staged path
+/// reports or takes them).
+#[inline(always)]
+fn tangent_axes<L: Lane>(n: Vec3<L>, given: [L; 3]) -> (Vec3<L>, Vec3<L>, L::Mask) {
+    let [x, y, z] = given;
+    let automatic = x.eq(L::zero()) & y.eq(L::zero()) & z.eq(L::zero());
+    let (unit, unit_ok) = unit_in_range(Vec3::new(x, y, z));
+    let (t, separated) = separated_tangent(n, unit);
+    let (mut t, mut b) = (t, n.cross(t));
+    if automatic.any() {
+        let (duff_t, duff_b) = duff_axes(n);
+        t = Vec3::select(automatic, duff_t, t);
+        b = Vec3::select(automatic, duff_b, b);
+    }
+    (t, b, automatic | (unit_ok & separated))
 }
 
 /// An overridden value's row in the caller's array, and its range.
@@ -447,7 +470,11 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                 (load_frame::<L>(frame, len, i), load3::<L>(*wo, i, L::LANES))
             }
             ExpandLanes::Raw {
-                count, normal, wo, ..
+                count,
+                normal,
+                tangent,
+                wo,
+                ..
             } => {
                 // A register past the caller's lanes (a padded chunk's last on AVX2)
                 // reads none of them: all padding.
@@ -462,7 +489,19 @@ fn expand_lanes<M: MaterialModel, L: Lane>(job: &mut ExpandJob<'_>) {
                     raw[p] = v;
                 }
                 let (normal, normal_ok) = unit_in_range(load3::<L>(*normal, at, n));
-                let (t, b) = duff_axes(normal);
+                let (t, b, tangent_ok) = match tangent {
+                    // Zero padding: an automatic tangent. Not `array::map`: it took
+                    // the loads out of line (tests/simd_inlining.rs).
+                    Some([x, y, z]) => {
+                        let pad = |row| load::<L>(row, at, n, 0.0);
+                        tangent_axes(normal, [pad(x), pad(y), pad(z)])
+                    }
+                    None => {
+                        let (t, b) = duff_axes(normal);
+                        (t, b, L::Mask::splat(true))
+                    }
+                };
+                in_range = in_range & tangent_ok;
                 let frame = LaneFrame::new(t, b, normal);
                 let (wo, wo_ok) = unit_in_range(load3::<L>(*wo, at, n));
                 in_range = in_range & normal_ok & wo_ok;

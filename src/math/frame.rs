@@ -47,8 +47,10 @@ impl Frame {
     /// store-forwarding stall at every shading point).
     #[inline(always)]
     pub fn new(n: Vec3<f32>, tangent: Option<Vec3<f32>>) -> Frame {
-        let t = tangent
-            .and_then(|t| Self::separated_tangent(n, t).or_else(|| Self::near_tangent(n, t)));
+        let t = tangent.and_then(|t| match separated_tangent(n, t) {
+            (perp, true) => Some(perp),
+            _ => Self::near_tangent(n, t),
+        });
         let (t, b) = match t {
             Some(t) => (t, n.cross(t)),
             None => duff_axes(n),
@@ -57,7 +59,7 @@ impl Frame {
     }
 
     /// [`Self::new`]'s tangent by Gram-Schmidt in f64, for a tangent within 30 degrees
-    /// of the normal or of a length out of [`Self::separated_tangent`]'s range; None
+    /// of the normal or of a length out of [`separated_tangent`]'s range; None
     /// when nothing of it is left but rounding.
     #[cold]
     #[inline(never)]
@@ -69,26 +71,6 @@ impl Frame {
         let len2 = perp.dot(perp);
         (len2 > (Self::PARALLEL_TANGENT * Self::PARALLEL_TANGENT) * t.dot(t))
             .then(|| perp.scale(1.0 / len2.sqrt()).to32())
-    }
-
-    /// [`Self::new`]'s tangent in f32 where f32 is as accurate: a tangent at least 30
-    /// degrees off the normal (`(n.t)^2 <= 3/4 |t|^2 |n|^2`), whose perpendicular part is
-    /// then at least half its length, so the rounding of `n.t` (a few ulps of `|t|`)
-    /// leaves at most twice that along `n` after normalizing. Otherwise None (the f64
-    /// path). The common case (a host's tangent from its own frame) so skips f64
-    /// divisions and a square root on every shading point.
-    #[inline(always)]
-    fn separated_tangent(n: Vec3<f32>, t: Vec3<f32>) -> Option<Vec3<f32>> {
-        let (tt, nn) = (t.length_squared(), n.length_squared());
-        let nt = n.dot(t);
-        if !((1e-18..=1e18).contains(&tt) && nt * nt <= 0.75 * tt * nn) {
-            return None;
-        }
-        // Divided by |n|^2 as in f64 (a caller's normal may be off unit length); by
-        // `inv_length` squared, which needs no division for a unit normal.
-        let inv_n = inv_length(nn);
-        let perp = t - n * (nt * (inv_n * inv_n));
-        Some(perp * inv_length(perp.length_squared()))
     }
 
     /// Relative size of a tangent's part perpendicular to the normal below which
@@ -207,6 +189,27 @@ impl F64 {
     fn sub(self, o: F64) -> F64 {
         F64([self.0[0] - o.0[0], self.0[1] - o.0[1], self.0[2] - o.0[2]])
     }
+}
+
+/// [`Frame::new`]'s tangent in f32 where f32 is as accurate, and the lanes where it is:
+/// a tangent at least 30 degrees off the normal (`(n.t)^2 <= 3/4 |t|^2 |n|^2`), whose
+/// perpendicular part is then at least half its length, so the rounding of `n.t` (a
+/// few ulps of `|t|`) leaves at most twice that along `n` after normalizing. Other
+/// lanes take `Frame::near_tangent`'s f64 path. The common case (a host's tangent from
+/// its own frame) so skips f64 divisions and a square root on every shading point;
+/// for any lane type, so material batches build tangent frames in registers with
+/// `Frame::new`'s bits.
+#[inline(always)]
+pub fn separated_tangent<L: Lane>(n: Vec3<L>, t: Vec3<L>) -> (Vec3<L>, L::Mask) {
+    let (tt, nn) = (t.length_squared(), n.length_squared());
+    let nt = n.dot(t);
+    let separated =
+        tt.ge(L::splat(1e-18)) & tt.le(L::splat(1e18)) & (nt * nt).le(L::splat(0.75) * tt * nn);
+    // Divided by |n|^2 as in f64 (a caller's normal may be off unit length); by
+    // `inv_length` squared, which needs no division for a unit normal.
+    let inv_n = inv_length(nn);
+    let perp = t - n * (nt * (inv_n * inv_n));
+    (perp * inv_length(perp.length_squared()), separated)
 }
 
 /// Tangent and bitangent `n x t` of a unit normal `n`, an orthonormal right-handed
