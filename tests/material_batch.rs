@@ -1043,8 +1043,8 @@ fn a_value_overridden_twice_checks_both_overrides() {
 /// and the albedo), pdfs, samples and albedos: a host's tangents (60 to 90 degrees off
 /// the normal, unnormalized, some of length 1e-11), automatic ones (zero and -0), and
 /// in the last chunk lanes the raw path leaves to the staged one (a tangent within 30
-/// degrees of the normal or along it, of length 1e13); with a NaN tangent, the same
-/// error. Staging is forced by overriding the roughness twice with the same row.
+/// degrees of the normal or along it, of length 1e13); with NaN, denormal, underflowing
+/// and infinite tangents, the same error and zeros. Staging is forced by overriding the roughness twice with the same row.
 #[test]
 fn tangent_frames_in_one_pass_equal_the_staged_ones() {
     use glint::params::ParamKind;
@@ -1155,7 +1155,14 @@ fn tangent_frames_in_one_pass_equal_the_staged_ones() {
     };
     for hostile in [false, true] {
         if hostile {
+            // A NaN, a denormal, an underflowing square and an infinite tangent.
             tangent[1][200] = f32::NAN;
+            for (lane, t) in [(230, [1e-40, 0.0, 0.0]), (240, [0.0, -1e-30, 0.0])]
+                .into_iter()
+                .chain([(250, [f32::INFINITY, 0.0, 1.0])])
+            {
+                (tangent[0][lane], tangent[1][lane], tangent[2][lane]) = (t[0], t[1], t[2]);
+            }
         }
         for kernels in Kernels::available() {
             let exec = Exec {
@@ -1177,6 +1184,10 @@ fn tangent_frames_in_one_pass_equal_the_staged_ones() {
             if hostile {
                 let e = raw.0.as_deref().unwrap_or("");
                 assert!(e.starts_with("lane 200: tangent"), "{what}: {e}");
+                // The eval's pdf row (both directions) of the failed lanes.
+                for lane in [200, 230, 240, 250, n + 200, n + 250] {
+                    assert_eq!(raw.1[3][lane], 0, "{what}: lane {lane}'s pdf");
+                }
             }
             for (k, (a, b)) in raw.1.iter().zip(&staged.1).enumerate() {
                 let lane = a.iter().zip(b).position(|(a, b)| a != b);
