@@ -249,6 +249,23 @@ fn pairs(case: &Case, c: &Closure, rng: &mut Rng) -> Pairs {
                 ] {
                     push(o.reflect(V::new(0.0, 0.0, side)), u);
                 }
+                // GGX's visible normals seen edge-on: the caps' point near `-v` (`v` the
+                // stretched view), `u0` a few ulps below 1 at the azimuth of `-v.xy`
+                // (`u1` at 0 and 1) and at `v.xy`'s own (the cap sum `c + v` of the
+                // mapping before 2026-12-07 cancelled there: 0.13 apart at alpha 1).
+                if let Some((ax, ay)) = case.alpha.filter(|_| case.label.contains(" ggx ")) {
+                    let up = if o.z < 0.0 { o * -1.0 } else { o };
+                    let own = (ay * up.y).atan2(ax * up.x) / std::f64::consts::TAU;
+                    let own = own.rem_euclid(1.0) as f32;
+                    let ulps =
+                        |x: f32, k: i32| f32::from_bits(x.to_bits().saturating_add_signed(k));
+                    for k in [1.0f32, 4.0] {
+                        let u0 = 1.0 - k * f32::EPSILON / 2.0;
+                        for u1 in [0.0, 6e-8, top, own, ulps(own, -3), ulps(own, 3)] {
+                            push(o.reflect(V::new(0.0, 0.0, side)), [0.5, u0, u1.min(top)]);
+                        }
+                    }
+                }
                 let unit = Vec3::try_unit(wo.x, wo.y, wo.z, "wo").unwrap();
                 for _ in 0..16 {
                     if let Ok(s) = c.sample(unit, rng.u3()) {

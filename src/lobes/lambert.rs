@@ -10,7 +10,7 @@
 use super::{
     Eval, Model, Params, Sample, Settle, Transport, VerifyCase, both_above, class_of, flags,
 };
-use crate::math::{INV_PI, Lane, Mask, PI, Rgb, Vec3};
+use crate::math::{INV_PI, Lane, Mask, Rgb, Vec3, azimuth};
 use crate::params::{ParamSpec, offset_of};
 
 pub struct Lambert;
@@ -107,7 +107,7 @@ impl Model for Lambert {
 #[inline(always)]
 pub(crate) fn cosine_hemisphere<L: Lane>(u0: L, u1: L) -> Vec3<L> {
     let r = u0.sqrt();
-    let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
+    let (sin_phi, cos_phi) = azimuth(u1);
     let z = (L::one() - u0).safe_sqrt();
     Vec3::new(r * cos_phi, r * sin_phi, z)
 }

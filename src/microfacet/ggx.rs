@@ -4,7 +4,7 @@
 //! (Heitz 2014 eq. 86), visible normals by Dupuy and Benyoub 2023's spherical caps.
 
 use super::{Ndf, SmithNdf, View, upper};
-use crate::math::{Lane, PI, Vec3};
+use crate::math::{Lane, PI, Vec3, azimuth};
 
 #[derive(Clone, Copy, Debug)]
 pub struct Ggx<L> {
@@ -50,8 +50,9 @@ impl<L: Lane> Ndf<L> for Ggx<L> {
     /// from `v` are `c + v` for `c` uniform on the unit sphere's cap `z > -v.z`;
     /// stretched back (`w` flipped to the upper hemisphere when below it). The same
     /// density as Heitz 2018's listing 1 with fewer square roots and divisions. `u0`
-    /// picks the cap's height, `u1` the azimuth, as the other distributions and the
-    /// cosine hemisphere take it, so a fused sample computes one `sin_cos`.
+    /// picks the cap's height, `u1` the azimuth (from `-v.xy`'s, see below) by
+    /// [`azimuth`], as the other distributions and the cosine hemisphere take it, so a
+    /// fused sample computes one `sin_cos`.
     #[inline(always)]
     fn sample(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
         let w = upper(w);
@@ -65,10 +66,38 @@ impl<L: Lane> Ndf<L> for Ggx<L> {
         // cancellation: z + v.z = (1 - u0)(1 + v.z) and, with 1 - v.z^2 = |v.xy|^2,
         // 1 - z^2 = u0 (|v.xy|^2 + (1 - u0)(1 + v.z)^2).
         let above = L::one() + v.z;
-        let lift = (L::one() - u0) * above;
-        let sin_theta = (u0 * (v.x * v.x + v.y * v.y + lift * above)).safe_sqrt();
-        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
-        let m = Vec3::new(sin_theta * cos_phi + v.x, sin_theta * sin_phi + v.y, lift);
+        let one_minus_u0 = L::one() - u0;
+        let lift = one_minus_u0 * above;
+        let r2 = v.x * v.x + v.y * v.y;
+        let sin2 = u0 * (r2 + lift * above);
+        let sin_theta = sin2.safe_sqrt();
+        let (sin_phi, cos_phi) = azimuth(u1);
+        // The point's offset from `v` in xy, `c.xy + v.xy`, with the azimuth measured
+        // counterclockwise from `-d`, `d = v.xy / r` (r = |v.xy|): `a d + b (d.y, -d.x)`
+        // with `a = r - sin_theta cos_phi`, `b = sin_theta sin_phi`. Summed as
+        // `c.xy + v.xy` it cancelled where the point nears `-v` (u0 near 1 at the
+        // azimuth of `-v.xy`: the normal seen edge-on), turning the normal by up to
+        // 0.13 rad at alpha 1. Here `a = (r - sin_theta) + sin_theta (1 - cos_phi)`,
+        // `r - sin_theta = (r^2 - sin^2) / (r + sin_theta)` with
+        // `r^2 - sin^2 = (1 - u0) (r^2 - u0 above^2)`, and `1 - cos_phi` as
+        // `sin_phi^2 / (1 + cos_phi)` where `cos_phi > 0`: no term cancels, and one
+        // division serves both.
+        let has_axis = r2.ge(L::splat(1e-30));
+        let inv_r = L::select(has_axis, r2.rsqrt(), L::zero());
+        let (dx, dy) = (L::select(has_axis, v.x * inv_r, L::one()), v.y * inv_r);
+        let r = r2 * inv_r;
+        let near = one_minus_u0 * (r2 - u0 * (above * above));
+        let positive = cos_phi.gt(L::zero());
+        let (turn, turn_den) = (
+            L::select(positive, sin_phi * sin_phi, L::one() - cos_phi),
+            L::select(positive, L::one() + cos_phi, L::one()),
+        );
+        let span = r + sin_theta;
+        let a = near
+            .mul_add(turn_den, sin_theta * turn * span)
+            .safe_div(span * turn_den);
+        let b = sin_theta * sin_phi;
+        let m = Vec3::new(a.mul_add(dx, b * dy), a.mul_add(dy, -(b * dx)), lift);
         // The normal's length by `rsqrt`: an error in it scales the normal without
         // turning it, and the sample's value and pdf come from the settled direction.
         // Its square is >= 1e-12, a normal float.

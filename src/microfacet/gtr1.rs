@@ -10,7 +10,7 @@
 //! peak is not the difference of two numbers near 1.
 
 use super::Ndf;
-use crate::math::{Lane, PI, Vec3};
+use crate::math::{Lane, Vec3, azimuth};
 
 /// GTR1 by its constants, computed once per lobe in f64 ([`Gtr1::constants`]).
 #[derive(Clone, Copy, Debug)]
@@ -66,7 +66,7 @@ impl<L: Lane> Ndf<L> for Gtr1<L> {
         let sin2 = (self.a2 * (t - L::one()) * self.inv_one_minus_a2).clamp(L::zero(), L::one());
         let cos2 = ((L::one() - self.a2 * t) * self.inv_one_minus_a2).max(L::zero());
         let sin_m = sin2.sqrt();
-        let (sin_phi, cos_phi) = (L::splat(2.0 * PI) * u1).sin_cos();
+        let (sin_phi, cos_phi) = azimuth(u1);
         Vec3::new(sin_m * cos_phi, sin_m * sin_phi, cos2.sqrt())
     }
 
