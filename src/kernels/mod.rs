@@ -254,6 +254,30 @@ pub struct FinishOutput<'a> {
     pub roughness: Option<&'a mut [f32]>,
 }
 
+impl FinishOutput<'_> {
+    /// The rows cut to `len` lanes (each at least as long), so that a loop over them
+    /// needs no bounds checks of its own (as `fused::eval_lanes` cuts its rows).
+    #[inline(always)]
+    pub fn cut(&mut self, len: usize) -> FinishOutput<'_> {
+        let [x, y, z] = &mut self.wi;
+        let [r, g, b] = &mut self.weight;
+        FinishOutput {
+            wi: [&mut x[..len], &mut y[..len], &mut z[..len]],
+            pdf: &mut self.pdf[..len],
+            weight: [&mut r[..len], &mut g[..len], &mut b[..len]],
+            value: self
+                .value
+                .as_mut()
+                .map(|[r, g, b]| [&mut r[..len], &mut g[..len], &mut b[..len]]),
+            flags: self.flags.as_deref_mut().map(|f| &mut f[..len]),
+            lobe: self.lobe.as_deref_mut().map(|l| &mut l[..len]),
+            component: self.component.as_deref_mut().map(|c| &mut c[..len]),
+            eta: self.eta.as_deref_mut().map(|e| &mut e[..len]),
+            roughness: self.roughness.as_deref_mut().map(|r| &mut r[..len]),
+        }
+    }
+}
+
 #[inline(always)]
 fn finish_body<L: Lane>(job: &mut FinishJob<'_>) {
     let probability = L::splat(job.probability);

@@ -86,7 +86,8 @@ pub trait Lane:
     /// `self * a + b`, fused where the ISA has FMA.
     fn mul_add(self, a: Self, b: Self) -> Self;
     fn sqrt(self) -> Self;
-    /// `1 / sqrt(self)`.
+    /// `1 / sqrt(self)` for a positive normal float (tests/vmath.rs); SIMD lanes give
+    /// NaN at 0 and may treat subnormals as 0.
     fn rsqrt(self) -> Self;
     fn exp(self) -> Self;
     fn ln(self) -> Self;

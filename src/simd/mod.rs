@@ -134,14 +134,15 @@ macro_rules! elementary_functions_from_vmath {
 use elementary_functions_from_vmath;
 
 /// One Newton step `y + y r / 2`, `r = 1 - x y^2`, on a hardware estimate `y` of
-/// `1 / sqrt(x)`, keeping the estimate where the step is not finite (x = 0 or inf).
+/// `1 / sqrt(x)`, for `x` a positive normal float ([`Lane::rsqrt`]'s domain; at 0 the
+/// step is NaN, no select keeps the estimate: every caller's argument is normal or
+/// selected away, and the select was 2 of a sampler's multiply-pipe operations).
 /// The residual and the update are fused, so only `x y` rounds before them: the
 /// estimate's own error (up to 1.5 2^-12 on Intel, less on AMD) leaves 1.5 e^2 <= 2e-7.
 #[inline(always)]
 fn newton_rsqrt<L: Lane>(x: L, y: L) -> L {
     let residual = (x * y).mul_add(-y, L::one());
-    let refined = (y * L::splat(0.5)).mul_add(residual, y);
-    L::select(refined.is_finite(), refined, y)
+    (y * L::splat(0.5)).mul_add(residual, y)
 }
 
 /// An instruction set the batch kernels can run on.
