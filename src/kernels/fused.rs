@@ -309,10 +309,7 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
     let mut out_of_range = false;
     // Every row cut to `len` once, so that the loop's loads and stores need no bounds
     // checks of their own (about 30 compares and branches a register otherwise).
-    let [wo0, wo1, wo2] = job.wo;
-    let [wi0, wi1, wi2] = job.wi;
-    let wo_rows = [&wo0[..len], &wo1[..len], &wo2[..len]];
-    let wi_rows = [&wi0[..len], &wi1[..len], &wi2[..len]];
+    let (wo_rows, wi_rows) = (cut3(job.wo, len), cut3(job.wi, len));
     let mut value = job
         .value
         .as_mut()
@@ -377,6 +374,13 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
         }
     }
     true
+}
+
+/// The three rows cut to their first `len` lanes.
+#[inline(always)]
+fn cut3(rows: [&[f32]; 3], len: usize) -> [&[f32]; 3] {
+    let [x, y, z] = rows;
+    [&x[..len], &y[..len], &z[..len]]
 }
 
 /// [`load3`] of the register at lane `i`, which may lie past the rows' end (no lane
@@ -523,9 +527,10 @@ fn sample_lanes<'a, S: Shape, L: Lane>(
     let len = job.out.pdf.len();
     // Every row cut to `len` once, as in `eval_lanes` (AVX2 closure sample, paired
     // rounds in both orders: +1% and +4%).
-    let cut = |[x, y, z]: [&'a [f32]; 3]| [&x[..len], &y[..len], &z[..len]];
-    let (wo_rows, u_rows) = (cut(job.wo), cut(job.u));
+    let (wo_rows, u_rows) = (cut3(job.wo, len), cut3(job.u, len));
     let mut direct = job.out.cut(len);
+    // The ring whole, reborrowed for as long as `direct` (a `&mut` to either is a
+    // register's output below, and `&mut` is invariant in its lifetime).
     let mut ring = ring.as_mut().map(|held| held.cut(held.pdf.len()));
     let (params, terms) = uniform::<L>(&job.lobes);
     let p = S::prepare::<L>(&params);
