@@ -544,7 +544,6 @@ fn eval_chunk(
             store: first,
             value: want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
             pdf: &mut pdf[..len],
-            except: None,
             out_of_range: false,
         };
         lobe.eval_lanes(kernels, &mut job);
@@ -1612,44 +1611,29 @@ fn sample_slot_by_slot(
         chosen,
         &mut sample_pdf[..len],
     );
-    // The mixture summed in slot order, as `Closure::sample` sums it: each slot
-    // evaluated on the lanes that chose another, then its own samples added.
-    let mut value = rows3(value, len);
-    let pdf = grow(pdf, len);
-    for row in value.iter_mut() {
-        row.fill(0.0);
-    }
-    pdf.fill(0.0);
+    // The mixture: the material's eval at the sampled directions, summed in slot
+    // order as `eval` sums it (the chosen slot's eval there is its sample's value and
+    // pdf), so that a sample's value and pdf are the eval's at its `wi`, to the bit.
+    let ([vr, vg, vb], pdf) = (rows3(value, len), grow(pdf, len));
+    let mut first = true;
     for (k, (_, lobe)) in slots.iter().enumerate() {
-        let slot = k as f32;
-        if rows.live[k] && picks[k] < n {
-            let [vr, vg, vb] = &mut value;
-            let mut job = EvalJob {
-                len,
-                mode: Transport::Radiance,
-                directions: Directions::Sampled,
-                wo: view3(wo, len),
-                wi: view3(wi, len),
-                lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-                store: false,
-                value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
-                pdf: &mut pdf[..],
-                except: Some((chosen, slot)),
-                out_of_range: false,
-            };
-            lobe.eval_lanes(kernels, &mut job);
+        if !rows.live[k] {
+            continue;
         }
-        if picks[k] > 0 {
-            material_rows::add_own(
-                kernels,
-                slot,
-                chosen,
-                view3(sample_value, len),
-                &sample_pdf[..len],
-                &mut value,
-                pdf,
-            );
-        }
+        let mut job = EvalJob {
+            len,
+            mode: Transport::Radiance,
+            directions: Directions::Sampled,
+            wo: view3(wo, len),
+            wi: view3(wi, len),
+            lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
+            store: first,
+            value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
+            pdf: &mut pdf[..],
+            out_of_range: false,
+        };
+        lobe.eval_lanes(kernels, &mut job);
+        first = false;
     }
     Ok(())
 }

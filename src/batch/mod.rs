@@ -581,7 +581,6 @@ fn eval_in_place(
             store: k == 0,
             value: out.value.as_mut().map(|v| rows_mut(v, &local)),
             pdf: &mut out.pdf[local.clone()],
-            except: None,
             out_of_range: false,
         };
         l.lobe.eval_lanes(kernels, &mut job);
@@ -625,7 +624,7 @@ fn eval_staged<'a, C: ClosureSource<'a>>(
         let (len, closure) = begin_group(input, s, g)?;
         stage_input(kernels, input, s, g, len, Some(wi));
         let (value, reverse) = (out.value.is_some(), out.pdf_reverse.is_some());
-        eval_lobes(kernels, input, s, g, closure, None, value, reverse);
+        eval_lobes(kernels, input, s, g, closure, false, value, reverse);
         let group = &s.groups.groups()[g];
         let scatter = Scatter::new(&group.lanes, base, &s.failed, s.any_failed);
         if let Some(v) = out.value.as_mut() {
@@ -649,9 +648,8 @@ fn eval_staged<'a, C: ClosureSource<'a>>(
 
 /// Accumulate every lobe of group `g`'s `closure` at the staged `wo` and `wi`, in
 /// lobe order: the pdf into `s.pdf`, with `want_value` the value into `s.value`, with
-/// `want_reverse` the pdf of `wi` to `wo` into `s.pdf_reverse`. Lobe `sampled`, whose
-/// sample gave `wi`, adds its own value and pdf (`s.sample_value`, `s.sample_pdf`)
-/// instead, as `Closure::sample` sums them.
+/// `want_reverse` the pdf of `wi` to `wo` into `s.pdf_reverse`. `sampled`: `wi` is a
+/// sample's, returned as it is (`Directions::Sampled`).
 #[allow(clippy::too_many_arguments)]
 fn eval_lobes<'a, C: ClosureSource<'a>>(
     kernels: Kernels,
@@ -659,7 +657,7 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
     s: &mut Scratch,
     g: usize,
     closure: &Closure,
-    sampled: Option<usize>,
+    sampled: bool,
     want_value: bool,
     want_reverse: bool,
 ) {
@@ -671,33 +669,17 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
         value,
         pdf,
         pdf_reverse,
-        sample_value,
-        sample_pdf,
         ..
     } = s;
     let group = &groups.groups()[g];
     let len = padded(group.lanes.len());
     for (k, l) in closure.lobes().iter().enumerate() {
-        if sampled == Some(k) {
-            for (j, &lane) in group.lanes.iter().enumerate() {
-                let c = input
-                    .closures
-                    .closure(lane as usize)
-                    .expect("resolved before");
-                for (value, own) in value.iter_mut().zip(&*sample_value) {
-                    value[j] += own[j];
-                }
-                pdf[j] += c.lobes()[k].probability * sample_pdf[j];
-            }
-            continue;
-        }
         let lanes = lobe.lanes(input, group, k, len, false);
         let [vr, vg, vb] = &mut *value;
         let mut job = EvalJob {
             len,
             mode: closure.transport(),
-            // With a sampled lobe, `wi` is its sample's.
-            directions: if sampled.is_some() {
+            directions: if sampled {
                 Directions::Sampled
             } else {
                 Directions::Unit
@@ -708,7 +690,6 @@ fn eval_lobes<'a, C: ClosureSource<'a>>(
             store: false,
             value: want_value.then(|| [&mut vr[..len], &mut vg[..len], &mut vb[..len]]),
             pdf: &mut pdf[..len],
-            except: None,
             out_of_range: false,
         };
         l.lobe.eval_lanes(kernels, &mut job);
@@ -1238,13 +1219,7 @@ fn mixture_in_place(
             return false;
         }
     }
-    mixture_lobe_by_lobe(
-        kernels,
-        closure,
-        shared_frame(closure),
-        &starts[..=count],
-        s,
-    );
+    mixture_lobe_by_lobe(kernels, closure, shared_frame(closure), len, s);
     let c = &mut s.compact;
     // The closure's samples in sorted order, then gathered into the caller's.
     let (want_value, want_eta) = (out.value.is_some(), out.eta.is_some());
@@ -1374,17 +1349,14 @@ fn mixture_in_place(
     true
 }
 
-/// The mixture sums of a sorted sample chunk (`starts`: each lobe's run of rows in
-/// `s`), lobe by lobe: each lobe evaluated on the other lobes' runs, its own run
-/// adding its sample.
+/// The mixture sums of the `len` rows of a sorted sample chunk in `s`, lobe by lobe.
 fn mixture_lobe_by_lobe(
     kernels: Kernels,
     closure: &Closure,
     frame: Option<Frame>,
-    starts: &[usize],
+    len: usize,
     s: &mut Scratch,
 ) {
-    let len = starts[starts.len() - 1];
     let c = &mut s.compact;
     // Lobes that share one frame take `wo` and the sampled `wi` into it once, as
     // their jobs would (`Directions::Sampled`).
@@ -1413,45 +1385,25 @@ fn mixture_lobe_by_lobe(
         }
         None => (view3(&c.wo, len), view3(&s.wi, len), Directions::Sampled),
     };
-    // The mixture summed in lobe order, as `Closure::sample` sums it: each lobe
-    // evaluated on the other lobes' runs, its own run adding its sample.
-    for row in rows3(&mut s.value, len) {
-        row.fill(0.0);
-    }
-    grow(&mut s.pdf, len).fill(0.0);
+    // The mixture: the closure's eval at the sampled directions, summed in lobe order
+    // as an eval's rows are (the chosen lobe's eval there is its sample's value and
+    // pdf), so that a sample's value and pdf are the eval's at its `wi`, to the bit.
+    let (mut value, pdf) = (rows3(&mut s.value, len), grow(&mut s.pdf, len));
     for (k, l) in closure.lobes().iter().enumerate() {
-        let own = starts[k]..starts[k + 1];
-        for run in [0..own.start, own.end..len] {
-            if run.is_empty() {
-                continue;
-            }
-            let mut job = EvalJob {
-                len: run.len(),
-                mode: closure.transport(),
-                directions,
-                wo: wo_rows.map(|row| &row[run.clone()]),
-                wi: wi_rows.map(|row| &row[run.clone()]),
-                lobe: uniform_lobe(closure, k),
-                store: false,
-                value: Some(run_mut(&mut s.value, &run)),
-                pdf: &mut s.pdf[run.clone()],
-                except: None,
-                out_of_range: false,
-            };
-            l.lobe.eval_lanes(kernels, &mut job);
-        }
-        for (v, own_v) in s.value.iter_mut().zip(&s.sample_value) {
-            for (v, &o) in v[own.clone()].iter_mut().zip(&own_v[own.clone()]) {
-                *v += o;
-            }
-        }
-        let p = l.probability;
-        for (q, &o) in s.pdf[own.clone()]
-            .iter_mut()
-            .zip(&s.sample_pdf[own.clone()])
-        {
-            *q += p * o;
-        }
+        let [r, g, b] = &mut value;
+        let mut job = EvalJob {
+            len,
+            mode: closure.transport(),
+            directions,
+            wo: wo_rows,
+            wi: wi_rows,
+            lobe: uniform_lobe(closure, k),
+            store: k == 0,
+            value: Some([&mut r[..], &mut g[..], &mut b[..]]),
+            pdf: &mut pdf[..],
+            out_of_range: false,
+        };
+        l.lobe.eval_lanes(kernels, &mut job);
     }
 }
 
@@ -1598,9 +1550,9 @@ fn sample_staged<'a, C: ClosureSource<'a>>(
             out_of_range: false,
         };
         lobe.sample_lanes(kernels, &mut job);
-        // The mixture at the sampled direction: the chosen lobe's own value and pdf
-        // (exact at the returned `wi`), the other lobes evaluated there.
-        eval_lobes(kernels, input, s, g, closure, Some(k), true, false);
+        // The mixture at the sampled direction: the closure's eval there (the chosen
+        // lobe's eval is its sample's value and pdf), to the bit.
+        eval_lobes(kernels, input, s, g, closure, true, true, false);
         let group = &s.groups.groups()[g];
         grow(&mut s.flags, len);
         grow(&mut s.lobe_index, len);

@@ -216,33 +216,6 @@ fn chosen_pdf_body<L: Lane>(
     }
 }
 
-/// Slot `slot`'s own sample added in the lanes that chose it: `value += own_value`,
-/// `pdf += own_pdf` (`p_k pdf_k`). Called after the slot's evals on the other lanes,
-/// slot by slot, so the mixture sums in slot order as `Closure::sample` sums it.
-#[inline(always)]
-fn add_own_body<L: Lane>(
-    slot: f32,
-    chosen: &[f32],
-    own_value: [&[f32]; 3],
-    own_pdf: &[f32],
-    value: &mut [&mut [f32]; 3],
-    pdf: &mut [f32],
-) {
-    let len = chosen.len();
-    for i in (0..len).step_by(L::LANES) {
-        let mine = L::load(&chosen[i..]).eq(L::splat(slot));
-        if !mine.any() {
-            continue;
-        }
-        for (row, own) in value.iter_mut().zip(own_value) {
-            let v = L::load(&row[i..]);
-            L::select(mine, v + L::load(&own[i..]), v).store(&mut row[i..]);
-        }
-        let q = L::load(&pdf[i..]);
-        L::select(mine, q + L::load(&own_pdf[i..]), q).store(&mut pdf[i..]);
-    }
-}
-
 kernel!(
     /// Frames from unit normal rows (`frames_body`).
     frames<>(normal: [&[f32]; 3], frame: &mut [f32]) => frames_body
@@ -254,10 +227,6 @@ kernel!(
 kernel!(
     /// `p_k pdf_k` of each lane's chosen slot (`chosen_pdf_body`).
     chosen_pdf<>(probability: &[f32], count: usize, chosen: &[f32], own_pdf: &mut [f32]) => chosen_pdf_body
-);
-kernel!(
-    /// One slot's own samples into the mixture (`add_own_body`).
-    add_own<>(slot: f32, chosen: &[f32], own_value: [&[f32]; 3], own_pdf: &[f32], value: &mut [&mut [f32]; 3], pdf: &mut [f32]) => add_own_body
 );
 
 #[cfg(test)]

@@ -3,8 +3,10 @@
 //!
 //! A closure samples lobe `k` with probability `p_k` ([`choose`]); the sample's value
 //! is the sum over lobes of `weight * f |cos|` at the sampled direction and its pdf
-//! the mixture `sum p_j pdf_j`, except for delta events, which carry the chosen
-//! lobe's own value and `p_k` times the event's discrete probability. [`finish`]
+//! the mixture `sum p_j pdf_j` (in the batch kernels, the closure's eval there to the
+//! bit: every lobe evaluated and summed as an eval sums them), except for delta
+//! events, which carry the chosen lobe's own value and `p_k` times the event's
+//! discrete probability. [`finish`]
 //! turns that into the sample a caller receives: `weight = value / pdf`, and a lane
 //! whose pdf or weight is not a positive finite number fails, reading all zero
 //! (`eta` 1).

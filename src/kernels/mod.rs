@@ -142,9 +142,6 @@ pub struct EvalJob<'a> {
     pub value: Option<[&'a mut [f32]; 3]>,
     /// `probability * pdf`.
     pub pdf: &'a mut [f32],
-    /// `(chosen, k)`: lanes whose `chosen` lobe is `k` get nothing (a sampled
-    /// mixture, whose chosen lobe's value comes from its sample).
-    pub except: Option<(&'a [f32], f32)>,
     /// See [`Directions::Raw`].
     pub out_of_range: bool,
 }
@@ -412,25 +409,13 @@ fn store_where<L: Lane>(only: Option<L::Mask>, v: L, row: &mut [f32], i: usize, 
 }
 
 /// `row[i..] = w f`, or `+= w f` by one fused multiply-add unless `overwrite` (as a
-/// fused kernel sums its lobes, `kernels::fused`); lanes of `excluded` get nothing.
+/// fused kernel sums its lobes, `kernels::fused`).
 #[inline(always)]
-fn put_product<L: Lane>(
-    w: L,
-    f: L,
-    excluded: Option<L::Mask>,
-    row: &mut [f32],
-    (i, n): (usize, usize),
-    overwrite: bool,
-) {
-    let (v, kept) = if overwrite {
-        (w * f, L::zero())
+fn put_product<L: Lane>(w: L, f: L, row: &mut [f32], (i, n): (usize, usize), overwrite: bool) {
+    let v = if overwrite {
+        w * f
     } else {
-        let old = load::<L>(row, i, n, 0.0);
-        (w.mul_add(f, old), old)
-    };
-    let v = match excluded {
-        Some(mask) => L::select(mask, kept, v),
-        None => v,
+        w.mul_add(f, load::<L>(row, i, n, 0.0))
     };
     store(v, row, i, n);
 }
@@ -604,21 +589,13 @@ impl<M: Model, L: Lane> RegisterOp<M, L> for EvalJob<'_> {
             lanes.frame.to_local_pair(wo, wi)
         };
         let e = M::eval(p, wo, wi, self.mode);
-        let excluded = chosen_mask::<L>(self.except, i, n);
         if let Some(rows) = &mut self.value {
             let terms = lanes.weight.to_array().into_iter().zip(e.value.to_array());
             for ((w, f), row) in terms.zip(rows.iter_mut()) {
-                put_product(w, f, excluded, row, (i, n), self.store);
+                put_product(w, f, row, (i, n), self.store);
             }
         }
-        put_product(
-            lanes.probability,
-            e.pdf,
-            excluded,
-            self.pdf,
-            (i, n),
-            self.store,
-        );
+        put_product(lanes.probability, e.pdf, self.pdf, (i, n), self.store);
     }
 }
 
@@ -995,7 +972,7 @@ pub fn eval_each_lane(
     job: &mut EvalJob<'_>,
     eval: impl Fn(&[f32], Vec3<f32>, Vec3<f32>, Transport) -> crate::lobes::Eval<f32>,
 ) {
-    debug_assert!(job.directions != Directions::Raw && job.except.is_none());
+    debug_assert!(job.directions != Directions::Raw);
     let mut params = Vec::new();
     for i in 0..job.len {
         let (frame, weight, probability) = job.lobe.lane(i, &mut params);
