@@ -509,13 +509,16 @@ fn for_chunks(
     result
 }
 
-/// Eval (with `want_value`), pdf and reverse pdf of every active lane, slot by slot.
+/// Eval (with `want_value`), pdf and (with `want_reverse`) reverse pdf of every active
+/// lane, slot by slot. `sampled`: `wi` is a sample's, returned as it is
+/// (`Directions::Sampled`).
 fn eval_chunk(
     kernels: Kernels,
     material: &Material,
     len: usize,
     s: &mut Scratch,
-    want_value: bool,
+    sampled: bool,
+    (want_value, want_reverse): (bool, bool),
 ) {
     let Scratch {
         material: rows,
@@ -537,7 +540,11 @@ fn eval_chunk(
         let mut job = EvalJob {
             len,
             mode: Transport::Radiance,
-            directions: Directions::Unit,
+            directions: if sampled {
+                Directions::Sampled
+            } else {
+                Directions::Unit
+            },
             wo: view3(wo, len),
             wi: view3(wi, len),
             lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
@@ -547,7 +554,9 @@ fn eval_chunk(
             out_of_range: false,
         };
         lobe.eval_lanes(kernels, &mut job);
-        super::eval_reverse(kernels, &**lobe, job, pdf_reverse);
+        if want_reverse {
+            super::eval_reverse(kernels, &**lobe, job, pdf_reverse);
+        }
         first = false;
     }
     if first {
@@ -939,7 +948,7 @@ fn eval_staged(
             albedo: false,
         };
         stage_chunk(kernels, input, lanes, len, s, errors, Some(eval))?;
-        eval_chunk(kernels, input.material, len, s, want_value);
+        eval_chunk(kernels, input.material, len, s, false, (want_value, true));
         scatter_direction(lanes, start, s, 0..len, o);
     }
     if let Some(a) = out.albedo.as_mut() {
@@ -1567,8 +1576,6 @@ fn sample_slot_by_slot(
         wo,
         wi,
         u: u_rows,
-        value,
-        pdf,
         sample_value,
         sample_pdf,
         eta,
@@ -1614,27 +1621,7 @@ fn sample_slot_by_slot(
     // The mixture: the material's eval at the sampled directions, summed in slot
     // order as `eval` sums it (the chosen slot's eval there is its sample's value and
     // pdf), so that a sample's value and pdf are the eval's at its `wi`, to the bit.
-    let ([vr, vg, vb], pdf) = (rows3(value, len), grow(pdf, len));
-    let mut first = true;
-    for (k, (_, lobe)) in slots.iter().enumerate() {
-        if !rows.live[k] {
-            continue;
-        }
-        let mut job = EvalJob {
-            len,
-            mode: Transport::Radiance,
-            directions: Directions::Sampled,
-            wo: view3(wo, len),
-            wi: view3(wi, len),
-            lobe: rows.lanes(k, lobe.lane_decoded_len(), len),
-            store: first,
-            value: Some([&mut vr[..], &mut vg[..], &mut vb[..]]),
-            pdf: &mut pdf[..],
-            out_of_range: false,
-        };
-        lobe.eval_lanes(kernels, &mut job);
-        first = false;
-    }
+    eval_chunk(kernels, material, len, s, true, (true, false));
     Ok(())
 }
 

@@ -433,19 +433,17 @@ impl<L: Lane> RegisterSample<L> {
     /// The chosen lobe's eval and its term, selected per lane.
     #[inline(always)]
     fn own(&self, terms: &[Term<L>; MAX_FUSED], lobes: usize) -> (Eval<L>, Term<L>) {
-        let (mut own, mut term) = (self.evals[0], terms[0]);
+        let (mut value, mut term) = (self.evals[0].value, terms[0]);
         let lobe = self.evals.iter().zip(terms).zip(self.mine);
         for ((e, t), mine) in lobe.take(lobes).skip(1) {
-            own = Eval {
-                value: Rgb::select(mine, e.value, own.value),
-                pdf: L::select(mine, e.pdf, own.pdf),
-            };
+            value = Rgb::select(mine, e.value, value);
             term = Term {
                 weight: Rgb::select(mine, t.weight, term.weight),
                 probability: L::select(mine, t.probability, term.probability),
             };
         }
-        (own, term)
+        let pdf = self.own_pdf(lobes);
+        (Eval { value, pdf }, term)
     }
 
     /// The chosen lobe's pdf, selected per lane. An index loop: with
