@@ -204,8 +204,7 @@ impl Model for DisneySpecular {
         mode: Transport,
         settle: &mut impl Settle<L>,
     ) -> Sample<L> {
-        let m = p.dist.sample(wo, u0, u1);
-        let wi = settle.settle(wo.reflect(m));
+        let wi = settle.settle(p.dist.sample_reflection(wo, u0, u1));
         // Value and pdf by eval at the settled direction, so both agree with eval to
         // the last bit.
         let e = Self::eval(p, wo, wi, mode);

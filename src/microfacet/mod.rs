@@ -41,6 +41,12 @@ pub trait Ndf<L: Lane>: Copy {
     fn sample(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L>;
     /// The solid-angle density of [`Self::sample`]'s normals for `w`.
     fn pdf(&self, w: Vec3<L>, m: Vec3<L>) -> L;
+    /// `w` reflected about a normal [`Self::sample`] draws for it. Override when the
+    /// sampler's normal reflects more cheaply before it is made unit.
+    #[inline(always)]
+    fn sample_reflection(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
+        w.reflect(self.sample(w, u0, u1))
+    }
 }
 
 /// A distribution with Smith masking-shadowing, anisotropic with per-lane alphas.
@@ -262,6 +268,11 @@ impl<L: Lane> Ndf<L> for Distribution<L> {
     #[inline(always)]
     fn sample(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
         smith_ndfs!(dispatch! { self, n => n.sample(w, u0, u1) })
+    }
+
+    #[inline(always)]
+    fn sample_reflection(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
+        smith_ndfs!(dispatch! { self, n => n.sample_reflection(w, u0, u1) })
     }
 
     #[inline(always)]
