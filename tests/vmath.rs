@@ -162,6 +162,22 @@ const TABLE: &[Row] = &[
         simd: 2.5e-2,
         inputs: erf_inv_last,
     },
+    Row {
+        f: MathFn::AzimuthSin,
+        domain: "[-2, 2] (random numbers in [0, 1])",
+        metric: Metric::Abs,
+        scalar: 2.5e-7,
+        simd: 2.5e-7,
+        inputs: azimuth,
+    },
+    Row {
+        f: MathFn::AzimuthCos,
+        domain: "[-2, 2] (random numbers in [0, 1])",
+        metric: Metric::Abs,
+        scalar: 2.5e-7,
+        simd: 2.5e-7,
+        inputs: azimuth,
+    },
 ];
 
 /// The f64 reference of `f` at the exact f64 values of its f32 arguments.
@@ -180,6 +196,8 @@ fn reference(f: MathFn, x: f64, y: f64) -> f64 {
         MathFn::Erf => erf_f64(x),
         MathFn::Erfc => reference::erfc(x),
         MathFn::ErfInv => erf_inv_f64(x),
+        MathFn::AzimuthSin => (2.0 * PI * x).sin(),
+        MathFn::AzimuthCos => (2.0 * PI * x).cos(),
     }
 }
 
@@ -194,6 +212,8 @@ fn vmath_f32(f: MathFn) -> Option<fn(f32, f32) -> f32> {
         MathFn::Acos => |x, _| vmath::acos(x),
         MathFn::Atan2 => |y, x| vmath::atan2(y, x),
         MathFn::Pow => |x, e| vmath::pow(x, e),
+        MathFn::AzimuthSin => |x, _| glint::math::azimuth(x).0,
+        MathFn::AzimuthCos => |x, _| glint::math::azimuth(x).1,
         _ => return None,
     })
 }
@@ -389,6 +409,16 @@ fn sin_cos() -> Vec<(f32, f32)> {
         .chain(geom(1e-30, 1e4, points() / 4).map(|x| -x))
         .chain(around(&quarter_turns, 8));
     unary(xs.filter(|x| x.abs() <= 1e4))
+}
+
+fn azimuth() -> Vec<(f32, f32)> {
+    let eighths: Vec<f32> = (-16..=16).map(|k| k as f32 / 8.0).collect();
+    let xs = lin(0.0, 1.0, points())
+        .chain(rand(-2.0, 2.0, points() / 2, 8))
+        .chain(geom(1e-30, 1.0, points() / 4))
+        .chain(geom(1e-30, 1.0, points() / 4).map(|x| -x))
+        .chain(around(&eighths, 4096));
+    unary(xs.filter(|x| x.abs() <= 2.0))
 }
 
 fn acos() -> Vec<(f32, f32)> {
@@ -754,6 +784,25 @@ const SPECIAL: &[(MathFn, f32, f32, Want, bool)] = {
         (Cos, 1e6, 0.0, Within(-1.0, 1.0), true),
         (Cos, 1e30, 0.0, Within(-1.0, 1.0), true),
         (Cos, f32::MAX, 0.0, Within(-1.0, 1.0), true),
+        (AzimuthSin, NAN, 0.0, Nan, true),
+        (AzimuthSin, INF, 0.0, Nan, true),
+        (AzimuthCos, -INF, 0.0, Nan, true),
+        (AzimuthSin, 0.0, 0.0, Is(0.0), true),
+        (AzimuthCos, 0.0, 0.0, Is(1.0), true),
+        (AzimuthSin, 0.5, 0.0, Is(0.0), true),
+        (AzimuthCos, 0.5, 0.0, Is(-1.0), true),
+        (AzimuthCos, 1.0, 0.0, Is(1.0), true),
+        (AzimuthSin, 0.25, 0.0, Near(1.0, 2.5e-7), true),
+        (
+            AzimuthCos,
+            1.0 - f32::EPSILON / 2.0,
+            0.0,
+            Near(1.0, 1.5e-7),
+            true,
+        ),
+        // Beyond the random numbers' range: finite and in [-1, 1].
+        (AzimuthSin, 1e30, 0.0, Within(-1.0, 1.0), true),
+        (AzimuthCos, -3.75e6, 0.0, Within(-1.0, 1.0), true),
         (Acos, 1.0, 0.0, Is(0.0), true),
         (Acos, -1.0, 0.0, Near(PI, 1e-7), true),
         (Acos, 0.0, 0.0, Near(PI / 2.0, 1e-7), true),

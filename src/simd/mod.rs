@@ -263,6 +263,10 @@ pub enum MathFn {
     Erf,
     Erfc,
     ErfInv,
+    /// The sine of [`crate::math::azimuth`]: `sin(2 pi x)`.
+    AzimuthSin,
+    /// The cosine of [`crate::math::azimuth`]: `cos(2 pi x)`.
+    AzimuthCos,
 }
 
 #[inline(always)]
@@ -282,6 +286,8 @@ fn apply<L: Lane>(f: MathFn, x: L, y: L) -> L {
         MathFn::Erf => special::erf(x),
         MathFn::Erfc => special::erfc_nonneg(x),
         MathFn::ErfInv => special::erf_inv(x),
+        MathFn::AzimuthSin => crate::math::azimuth(x).0,
+        MathFn::AzimuthCos => crate::math::azimuth(x).1,
     }
 }
 
