@@ -50,9 +50,9 @@ impl<L: Lane> Ndf<L> for Ggx<L> {
     /// from `v` are `c + v` for `c` uniform on the unit sphere's cap `z > -v.z`;
     /// stretched back (`w` flipped to the upper hemisphere when below it). The same
     /// density as Heitz 2018's listing 1 with fewer square roots and divisions. `u0`
-    /// picks the cap's height, `u1` the azimuth (from `-v.xy`'s, see below) by
-    /// [`azimuth`], as the other distributions and the cosine hemisphere take it, so a
-    /// fused sample computes one `sin_cos`.
+    /// picks the cap's height, `u1` the azimuth (from `-v.xy`'s, see
+    /// `Ggx::visible_normal`) by [`azimuth`], as the other distributions and the
+    /// cosine hemisphere take it, so a fused sample computes one azimuth pair.
     #[inline(always)]
     fn sample(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
         // The normal's length by `rsqrt`: an error in it scales the normal without
@@ -61,7 +61,7 @@ impl<L: Lane> Ndf<L> for Ggx<L> {
         self.visible_normal(w, u0, u1).normalize_estimate()
     }
 
-    /// `w` reflected about the unnormalized [`Ggx::visible_normal`] `m`:
+    /// `w` reflected about the unnormalized `Ggx::visible_normal` `m`:
     /// `m 2 (w.m) / |m|^2 - w`, one division in place of the normalization.
     #[inline(always)]
     fn sample_reflection(&self, w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {

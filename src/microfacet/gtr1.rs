@@ -61,7 +61,7 @@ impl<L: Lane> Ndf<L> for Gtr1<L> {
     fn sample(&self, _w: Vec3<L>, u0: L, u1: L) -> Vec3<L> {
         // t = (a^2)^(-u0) in [1, 1 / a^2]; the azimuth from u1, as the other
         // distributions and the cosine hemisphere take it, so that a fused sample
-        // computes one `sin_cos` for every lobe.
+        // computes one azimuth pair for every lobe.
         let t = (-(u0 * self.ln_a2)).exp();
         let sin2 = (self.a2 * (t - L::one()) * self.inv_one_minus_a2).clamp(L::zero(), L::one());
         let cos2 = ((L::one() - self.a2 * t) * self.inv_one_minus_a2).max(L::zero());
