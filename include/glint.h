@@ -1110,11 +1110,15 @@ const char *glint_last_error(void);
 /*
  Create a runtime. `config` is NULL or `key=value` pairs separated by spaces,
  commas or semicolons; valid keys: `isa` (`auto` | `scalar` | `avx2` | `avx512`;
- an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`) and `threads` (0 = one per
+ an ISA this CPU lacks is `GLINT_ERROR_UNSUPPORTED`), `threads` (0 = one per
  core, the default; 1 = batch calls stay on the calling thread; N = a pool of N),
- `plugins` (a directory whose `*.so` plugins are loaded, in file-name order) and
+ `plugins` (a directory whose `*.so` plugins are loaded, in file-name order),
  `prune` (in [0, 1], default 0.001: materials do not emit a lobe whose
- `luminance(weight * albedo(wo))`, by the lobe's albedo estimate, is below it).
+ `luminance(weight * albedo(wo))`, by the lobe's albedo estimate, is below it) and
+ `stores` (`auto` | `held` | `direct`: whether batch calls of 32768 lanes or more
+ whose output rows collide with their input rows in the L2 cache hold their outputs
+ back in a ring; `auto`, the default, holds them except on AMD CPUs). Results are
+ the same bits under every `stores`.
 
  # Safety
  `config` is NULL or a NUL-terminated string; `out` is valid for writes.

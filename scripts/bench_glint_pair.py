@@ -2,7 +2,8 @@
 """Time two Glint libraries against each other in one process, on one set of arrays.
 
     target/bench-venv/bin/python scripts/bench_glint_pair.py OLD.so NEW.so \
-        [--sizes 4096,1048576] [--rounds 15] [--case principled]
+        [--sizes 4096,1048576] [--rounds 15] [--case principled] \
+        [--old-config stores=held] [--new-config stores=direct]
 
 A project script, not part of CI (the venv, with numpy, is the one
 scripts/bench_vs_mitsuba.py creates). Separate runs of that script scatter by 5-10%
@@ -10,7 +11,8 @@ on this machine (where the kernel and the heap place the arrays and a held call'
 ring), more than a kernel change often gains; here both libraries take the script's
 own inputs and output arrays (its NumPy layout, the same addresses for both), and
 rounds alternate between them: each round is `median_c` of one library, then of the
-other. Reported per size and op: each library's median M lanes/s and the median,
+other. One library may be given twice, its runtimes configured apart (`--old-config`,
+`--new-config`: runtime config items added to `isa=auto threads=1`). Reported per size and op: each library's median M lanes/s and the median,
 quartiles and count of the paired ratios NEW / OLD.
 """
 
@@ -39,14 +41,16 @@ def main():
     parser.add_argument("--sizes", default="4096,1048576")
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--case", default="principled")
+    parser.add_argument("--old-config", default="")
+    parser.add_argument("--new-config", default="")
     args = parser.parse_args()
     import numpy as np
 
     description = bench.case_table([1, 1, 1], [1, 1, 1])[args.case][1]
     libs = []
-    for path in (args.old, args.new):
+    for path, config in ((args.old, args.old_config), (args.new, args.new_config)):
         glint = bench.Glint(path)
-        runtime, arena, _ = glint.runtime("isa=auto threads=1")
+        runtime, arena, _ = glint.runtime(f"isa=auto threads=1 {config}")
         libs.append((glint, glint.closure(runtime, arena, description)))
     for n in (int(s) for s in args.sizes.split(",")):
         d = bench.inputs(n, False, np)

@@ -4,6 +4,7 @@
 
 use crate::batch::{Exec, Threads};
 use crate::error::{Error, Status};
+use crate::kernels::delay::Stores;
 use crate::plugin;
 use crate::registry::Registry;
 use crate::simd::{Isa, Kernels};
@@ -31,6 +32,9 @@ pub struct Settings {
     /// estimate, `Model::albedo_estimate`) is below
     /// this (`prune=`, in [0, 1]; default `materials::DEFAULT_PRUNE`).
     pub prune: f32,
+    /// How streaming batch calls whose rows collide in the L2 cache store their
+    /// outputs (`stores=`: `auto`, `held`, `direct`; see `kernels::delay`).
+    pub stores: Stores,
 }
 
 impl Default for Settings {
@@ -40,12 +44,13 @@ impl Default for Settings {
             threads: 0,
             plugins: None,
             prune: crate::materials::DEFAULT_PRUNE,
+            stores: Stores::Auto,
         }
     }
 }
 
 /// Configuration keys `Settings::parse` accepts.
-pub const CONFIG_KEYS: &[&str] = &["isa", "threads", "plugins", "prune"];
+pub const CONFIG_KEYS: &[&str] = &["isa", "threads", "plugins", "prune", "stores"];
 
 /// Most threads `threads=N` accepts.
 pub const MAX_THREADS: usize = 1024;
@@ -114,6 +119,17 @@ impl Settings {
                             )
                         })?
                 }
+                "stores" => {
+                    settings.stores = Stores::ALL
+                        .into_iter()
+                        .find(|s| s.name() == value)
+                        .ok_or_else(|| {
+                            Error::new(
+                                Status::OutOfRange,
+                                format!("stores={value}: valid values: auto, held, direct"),
+                            )
+                        })?
+                }
                 _ => {
                     return Err(Error::new(
                         Status::UnknownName,
@@ -143,7 +159,8 @@ impl Runtime {
         let kernels = match settings.isa {
             IsaSetting::Auto => Kernels::best(),
             IsaSetting::Only(isa) => Kernels::new(isa)?,
-        };
+        }
+        .with_stores(settings.stores);
         let pool = match settings.threads {
             0 | 1 => None,
             n => Some(

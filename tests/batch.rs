@@ -10,7 +10,7 @@ use glint::batch::{
     self, BLOCK, BatchInput, ClosureSource, EvalOutput, Exec, SampleOutput, SampleRandoms, Soa3,
     Soa3Mut, Threads,
 };
-use glint::kernels::delay::{DELAY, STREAMING_LANES};
+use glint::kernels::delay::{self, DELAY, STREAMING_LANES, Stores};
 use glint::lobes::Transport;
 use glint::math::{Frame, Vec3};
 use glint::registry::Registry;
@@ -432,8 +432,10 @@ fn one_shared_closure_matches_per_lane_closures() {
 fn shared_closures_in_place_match_the_staged_path_bit_for_bit() {
     let mut rng = Rng::new(21);
     let all = closures(&mut rng);
-    // A call of STREAMING_LANES or more holds its outputs back (kernels::delay); its
-    // last block here runs past the ring's length and ends in a partial register.
+    // A call of STREAMING_LANES or more streams (kernels::delay); whether its rows,
+    // each allocated apart, collide and it holds its outputs back depends on where the
+    // allocator puts them (the ring's own test is
+    // outputs_held_back_are_those_stored_directly_bit_for_bit).
     for n in [1, 13, 300, BLOCK + 37, STREAMING_LANES + DELAY + 37] {
         for bad in [false, true] {
             let mut l = lanes(n, 1, &mut rng);
@@ -779,10 +781,11 @@ fn eval_and_sample(
 
 /// A call of STREAMING_LANES or more whose rows collide in the L2 cache's sets (the
 /// rows of one allocation, 20 bytes apart in its 128 KB cycle) holds its outputs back
-/// in a ring (kernels::delay): the same bits as calls too small to stream over rows
-/// of their own. The rows start at every offset within a line a float may (the ring
-/// releases each row's registers moved onto its lines); a last block past the ring's
-/// length ends in a partial register.
+/// in a ring (kernels::delay) with `stores=held` (and `auto` on a CPU not AMD's): the
+/// same bits as calls too small to stream over rows of their own. The rows start at
+/// every offset within a line a float may (the ring releases each row's registers
+/// moved onto its lines); a last block past the ring's length ends in a partial
+/// register. With `stores=direct` the same call stores directly: the same bits again.
 #[test]
 fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
     let mut rng = Rng::new(34);
@@ -791,8 +794,11 @@ fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
     let l = lanes(n, 1, &mut rng);
     // One allocation, a row every 128 KB and 20 bytes.
     let stride = n.next_multiple_of(32 << 10) + 5;
+    let cases = Kernels::available()
+        .into_iter()
+        .flat_map(|k| [Stores::Held, Stores::Direct].map(|s| k.with_stores(s)));
     for c in &all {
-        for kernels in Kernels::available() {
+        for kernels in cases.clone() {
             let exec = Exec {
                 kernels,
                 threads: Threads::Caller,
@@ -837,7 +843,7 @@ fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
             let mut out: Vec<&mut [f32]> = direct.iter_mut().map(|v| &mut v[..]).collect();
             eval_and_sample(&exec, c, &own, &mut out, &mut direct_ints, BLOCK);
 
-            let what = format!("{:?}", kernels.isa());
+            let what = format!("{:?}, {:?}", kernels.isa(), kernels.stores());
             for (k, (a, b)) in held.iter().zip(&direct).enumerate() {
                 let same = a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
                 assert!(same, "{what}: output row {k} differs");
@@ -853,4 +859,21 @@ fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
             );
         }
     }
+}
+
+/// Which jobs may hold their outputs back (kernels::delay::streams): those of calls of
+/// STREAMING_LANES or more, longer than the ring, on kernels whose `stores=` holds.
+#[test]
+fn only_streaming_jobs_hold_and_only_where_stores_says() {
+    let held = Kernels::scalar().with_stores(Stores::Held);
+    let lanes = DELAY + 1;
+    assert!(delay::streams(held, STREAMING_LANES, lanes));
+    assert!(!delay::streams(held, STREAMING_LANES - 1, lanes));
+    assert!(!delay::streams(held, STREAMING_LANES, DELAY));
+    let direct = Kernels::scalar().with_stores(Stores::Direct);
+    assert!(!delay::streams(direct, STREAMING_LANES, lanes));
+    assert_eq!(
+        delay::streams(Kernels::scalar(), STREAMING_LANES, lanes),
+        Stores::Auto.hold()
+    );
 }

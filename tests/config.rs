@@ -1,8 +1,9 @@
 //! `Settings::parse` and `Runtime::new`: the configuration string's keys and values,
 //! with errors that name the valid keys and values.
 
+use glint::kernels::delay::Stores;
 use glint::runtime::{CONFIG_KEYS, IsaSetting, MAX_THREADS, Settings};
-use glint::simd::{Isa, Kernels};
+use glint::simd::{Isa, Kernels, is_amd};
 use glint::{Runtime, Status};
 
 #[test]
@@ -29,7 +30,10 @@ fn defaults_and_valid_values() {
     );
     assert_eq!(Settings::parse("threads=3").unwrap().threads, 3);
     assert_eq!(Settings::parse("").unwrap().threads, 0);
-    assert_eq!(CONFIG_KEYS, ["isa", "threads", "plugins", "prune"]);
+    assert_eq!(
+        CONFIG_KEYS,
+        ["isa", "threads", "plugins", "prune", "stores"]
+    );
     assert_eq!(Settings::parse("").unwrap().prune, 1e-3);
     assert_eq!(Settings::parse("prune=0").unwrap().prune, 0.0);
     assert_eq!(Settings::parse("prune=0.25").unwrap().prune, 0.25);
@@ -130,4 +134,39 @@ fn bad_values_and_syntax() {
         Settings::parse("isa=").unwrap_err().status,
         Status::OutOfRange
     );
+}
+
+/// `stores=`: how streaming calls whose rows collide store (kernels::delay); the
+/// runtime's kernels carry it. `auto` holds the outputs back except on AMD's CPUs,
+/// whose vendor `/proc/cpuinfo` also names.
+#[test]
+fn stores_values() {
+    assert_eq!(Settings::parse("").unwrap().stores, Stores::Auto);
+    for (value, stores) in [
+        ("auto", Stores::Auto),
+        ("held", Stores::Held),
+        ("direct", Stores::Direct),
+    ] {
+        let config = format!("stores={value}");
+        assert_eq!(Settings::parse(&config).unwrap().stores, stores);
+        let rt = Runtime::new(&format!("{config} isa=scalar")).unwrap();
+        assert_eq!(rt.kernels(), Kernels::scalar().with_stores(stores));
+    }
+    for bad in ["", "ring", "Held", "1"] {
+        let e = Settings::parse(&format!("stores={bad}")).unwrap_err();
+        assert_eq!(e.status, Status::OutOfRange, "stores={bad}");
+        assert!(e.message.contains("auto, held, direct"), "{}", e.message);
+    }
+    assert!(Stores::Held.hold());
+    assert!(!Stores::Direct.hold());
+    if let Ok(cpuinfo) = std::fs::read_to_string("/proc/cpuinfo") {
+        let vendor = cpuinfo
+            .lines()
+            .find_map(|l| l.strip_prefix("vendor_id"))
+            .map(|v| v.trim_start_matches([' ', '\t', ':']).trim());
+        if let Some(vendor) = vendor {
+            assert_eq!(is_amd(), vendor == "AuthenticAMD", "vendor_id {vendor}");
+            assert_eq!(Stores::Auto.hold(), vendor != "AuthenticAMD");
+        }
+    }
 }

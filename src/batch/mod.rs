@@ -506,7 +506,7 @@ fn fused_eval(
         pdf: &mut out.pdf[local],
         held: None,
     };
-    if delay::streams(wo.x.len(), lanes.len()) && job.rows_collide() {
+    if delay::streams(kernels, wo.x.len(), lanes.len()) && job.rows_collide() {
         return Some(with_scratch(|s| {
             (fused.eval_held)(kernels, &mut job.with_ring(s.rings.eval()))
         }));
@@ -1071,7 +1071,7 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             out: out.finish_rows(&(0..end - start)),
             held: None,
         };
-        let sample = if delay::streams(input.count, end - start) && job.rows_collide() {
+        let sample = if delay::streams(kernels, input.count, end - start) && job.rows_collide() {
             job.held = Some(s.rings.sample().rows_like(&job.out));
             fused.sample_held
         } else {

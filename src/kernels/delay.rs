@@ -27,19 +27,65 @@
 //! (`bench_glint_pair.py`, 1M lanes): eval +10.3%, +5.5%, +4.6%, sample within 1.1%.
 //! Rows that do not collide keep their direct stores even off lines (rows 12 KB apart,
 //! 16 bytes past lines: eval 417 direct against 406 through the ring).
+//!
+//! All of the above was measured on an Intel Xeon with AVX-512. On an AMD EPYC (Zen 3,
+//! AVX2) the ring lost in the colliding layout too, so the runtime's `stores=auto`
+//! stores directly on AMD's CPUs ([`Stores`]).
 
 use super::{FinishOutput, store};
 use crate::math::Lane;
+use crate::simd::Kernels;
 
 /// Calls of at least this many lanes hold their outputs back: their ten rows, 4 bytes
 /// a lane, outgrow the L2 cache and stream from memory. Smaller calls, whose rows a
 /// host's loop keeps in cache, gain nothing from it and store directly.
 pub const STREAMING_LANES: usize = 1 << 15;
 
-/// Whether a job of `lanes` lanes of a call of `count` may hold its outputs back: it
-/// does where some row it writes also [`collide`]s with one it reads.
-pub fn streams(count: usize, lanes: usize) -> bool {
-    count >= STREAMING_LANES && lanes > DELAY
+/// How a streaming call whose rows [`collide`] stores its outputs: the runtime's
+/// `stores=` setting, carried by its [`Kernels`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Stores {
+    /// [`Stores::Held`], except on AMD's CPUs ([`crate::simd::is_amd`]), where
+    /// [`Stores::Direct`]: the ring was measured to gain on an Intel Xeon (the module
+    /// doc) and to lose on an AMD EPYC (Zen 3, AVX2). There, in `bench_vs_mitsuba.py`'s
+    /// arrays at 1M lanes (`bench_glint_pair.py`, one library under both settings, four
+    /// runs of 11 rounds, both orders), the Disney closure's eval was 13-17% faster
+    /// direct (median paired ratios 1.13-1.17), its sample 0-3%. Other CPUs of either
+    /// vendor are unmeasured.
+    #[default]
+    Auto,
+    /// Through the ring.
+    Held,
+    /// To the caller's rows as computed.
+    Direct,
+}
+
+impl Stores {
+    pub const ALL: [Stores; 3] = [Stores::Auto, Stores::Held, Stores::Direct];
+
+    /// The name used in the runtime configuration (`stores=...`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Stores::Auto => "auto",
+            Stores::Held => "held",
+            Stores::Direct => "direct",
+        }
+    }
+
+    /// Whether streaming calls whose rows collide hold their outputs back.
+    pub fn hold(self) -> bool {
+        match self {
+            Stores::Auto => !crate::simd::is_amd(),
+            Stores::Held => true,
+            Stores::Direct => false,
+        }
+    }
+}
+
+/// Whether a job of `lanes` lanes of a call of `count` on `kernels` may hold its
+/// outputs back: it does where some row it writes also [`collide`]s with one it reads.
+pub fn streams(kernels: Kernels, count: usize, lanes: usize) -> bool {
+    count >= STREAMING_LANES && lanes > DELAY && kernels.stores().hold()
 }
 
 /// Whether a row of `writes` starts within 2 KB of a row of `reads` in the L2

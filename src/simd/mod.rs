@@ -18,6 +18,7 @@
 //! `kernel!` macro's `#[target_feature]` entry points.
 
 use crate::error::{Error, Status};
+use crate::kernels::delay::Stores;
 use crate::math::Lane;
 
 /// A public kernel that runs `$body` with the lane type of its `Kernels`: the
@@ -190,17 +191,19 @@ impl Isa {
     }
 }
 
-/// Proof that the CPU runs an ISA: the only handle to the SIMD kernels.
+/// Proof that the CPU runs an ISA: the only handle to the SIMD kernels; with how
+/// their streaming calls store ([`Stores`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Kernels {
     isa: Isa,
+    stores: Stores,
 }
 
 impl Kernels {
     /// The kernels for `isa`, or `GLINT_ERROR_UNSUPPORTED` when this CPU lacks it.
     pub fn new(isa: Isa) -> Result<Kernels, Error> {
         if isa.is_supported() {
-            Ok(Kernels { isa })
+            Ok(Kernels::of(isa))
         } else {
             Err(Error::new(
                 Status::Unsupported,
@@ -218,7 +221,14 @@ impl Kernels {
     }
 
     pub const fn scalar() -> Kernels {
-        Kernels { isa: Isa::Scalar }
+        Kernels::of(Isa::Scalar)
+    }
+
+    const fn of(isa: Isa) -> Kernels {
+        Kernels {
+            isa,
+            stores: Stores::Auto,
+        }
     }
 
     /// The widest ISA this CPU supports.
@@ -227,7 +237,7 @@ impl Kernels {
             .iter()
             .rev()
             .find(|isa| isa.is_supported())
-            .map_or(Kernels::scalar(), |&isa| Kernels { isa })
+            .map_or(Kernels::scalar(), |&isa| Kernels::of(isa))
     }
 
     /// Every ISA this CPU supports, narrowest first.
@@ -235,13 +245,42 @@ impl Kernels {
         Isa::ALL
             .iter()
             .filter(|isa| isa.is_supported())
-            .map(|&isa| Kernels { isa })
+            .map(|&isa| Kernels::of(isa))
             .collect()
     }
 
     pub fn isa(self) -> Isa {
         self.isa
     }
+
+    /// These kernels, their streaming calls storing as `stores` says.
+    pub fn with_stores(self, stores: Stores) -> Kernels {
+        Kernels { stores, ..self }
+    }
+
+    pub fn stores(self) -> Stores {
+        self.stores
+    }
+}
+
+/// Whether this CPU is AMD's: the vendor string of CPUID's leaf 0.
+pub fn is_amd() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        static AMD: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        *AMD.get_or_init(|| {
+            // `__cpuid` is an unsafe fn in older Rust (rust-version is 1.89).
+            #[allow(unused_unsafe)]
+            // SAFETY: every x86-64 CPU has CPUID, and its leaf 0.
+            let id = unsafe { std::arch::x86_64::__cpuid(0) };
+            [id.ebx, id.edx, id.ecx]
+                .iter()
+                .flat_map(|r| r.to_le_bytes())
+                .eq(*b"AuthenticAMD")
+        })
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
 }
 
 /// The vectorized math functions, for tests and benchmarks that measure each
