@@ -32,8 +32,8 @@ pub struct Settings {
     /// estimate, `Model::albedo_estimate`) is below
     /// this (`prune=`, in [0, 1]; default `materials::DEFAULT_PRUNE`).
     pub prune: f32,
-    /// How streaming batch calls whose rows collide in the L2 cache store their
-    /// outputs (`stores=`: `auto`, `held`, `direct`; see `kernels::delay`).
+    /// Whether the fused kernels hold their outputs back, after later loads
+    /// (`stores=`: `auto`, `held`, `direct`; see `kernels::delay::Stores`).
     pub stores: Stores,
 }
 

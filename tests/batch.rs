@@ -422,12 +422,22 @@ fn one_shared_closure_matches_per_lane_closures() {
     }
 }
 
+/// Every ISA this CPU has, with its outputs held back and stored directly
+/// (`stores=`): the same bits either way.
+fn held_and_direct() -> Vec<Kernels> {
+    Kernels::available()
+        .into_iter()
+        .flat_map(|k| [Stores::Held, Stores::Direct].map(|s| k.with_stores(s)))
+        .collect()
+}
+
 /// A closure shared by every lane with no active mask runs in place: the kernels read
 /// the caller's arrays, normalize in the kernel and end with a masked tail. Its
 /// outputs must be bit-for-bit those of the staged path (the same closure given per
 /// lane), at counts with tails and across chunks and blocks, and when some lanes
 /// need the staged path's exact normalization (lengths beyond 1e12) or fail (NaN,
-/// zero length, a non-finite random number), which sends their chunk back to staging.
+/// zero length, a non-finite random number), which sends their chunk back to staging;
+/// with the eval's sums stored as computed or two registers later (`stores=`).
 #[test]
 fn shared_closures_in_place_match_the_staged_path_bit_for_bit() {
     let mut rng = Rng::new(21);
@@ -450,14 +460,18 @@ fn shared_closures_in_place_match_the_staged_path_bit_for_bit() {
             }
             for c in &all {
                 let per_lane: Vec<&Closure> = vec![c; n];
-                for kernels in Kernels::available() {
+                for kernels in held_and_direct() {
                     let exec = Exec {
                         kernels,
                         threads: Threads::Caller,
                     };
                     let (staged, staged_results) = run_with(&exec, &per_lane[..], n, None, &l);
                     let (shared, shared_results) = run_with(&exec, c, n, None, &l);
-                    let what = format!("{:?}, {n} lanes, bad lanes {bad}", kernels.isa());
+                    let what = format!(
+                        "{:?}, {:?}, {n} lanes, bad lanes {bad}",
+                        kernels.isa(),
+                        kernels.stores()
+                    );
                     assert!(shared == staged, "{what}: outputs differ");
                     let messages = |r: Vec<Result<(), glint::Error>>| {
                         r.into_iter()
@@ -794,11 +808,8 @@ fn outputs_held_back_are_those_stored_directly_bit_for_bit() {
     let l = lanes(n, 1, &mut rng);
     // One allocation, a row every 128 KB and 20 bytes.
     let stride = n.next_multiple_of(32 << 10) + 5;
-    let cases = Kernels::available()
-        .into_iter()
-        .flat_map(|k| [Stores::Held, Stores::Direct].map(|s| k.with_stores(s)));
     for c in &all {
-        for kernels in cases.clone() {
+        for kernels in held_and_direct() {
             let exec = Exec {
                 kernels,
                 threads: Threads::Caller,

@@ -136,8 +136,8 @@ fn bad_values_and_syntax() {
     );
 }
 
-/// `stores=`: how streaming calls whose rows collide store (kernels::delay); the
-/// runtime's kernels carry it. `auto` holds the outputs back except on AMD's CPUs,
+/// `stores=`: whether the fused kernels hold their outputs back (kernels::delay::Stores);
+/// the runtime's kernels carry it. `auto` holds the outputs back except on AMD's CPUs,
 /// whose vendor `/proc/cpuinfo` also names.
 #[test]
 fn stores_values() {

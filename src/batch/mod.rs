@@ -511,7 +511,12 @@ fn fused_eval(
             (fused.eval_held)(kernels, &mut job.with_ring(s.rings.eval()))
         }));
     }
-    Some((fused.eval)(kernels, &mut job))
+    let eval = if kernels.stores().hold() {
+        fused.eval_late
+    } else {
+        fused.eval
+    };
+    Some(eval(kernels, &mut job))
 }
 
 /// Eval lanes `lanes` in place: the kernels read the caller's directions and write

@@ -393,10 +393,11 @@ pub extern "C" fn glint_last_error() -> *const c_char {
 /// `plugins` (a directory whose `*.so` plugins are loaded, in file-name order),
 /// `prune` (in [0, 1], default 0.001: materials do not emit a lobe whose
 /// `luminance(weight * albedo(wo))`, by the lobe's albedo estimate, is below it) and
-/// `stores` (`auto` | `held` | `direct`: whether batch calls of 32768 lanes or more
-/// whose output rows collide with their input rows in the L2 cache hold their outputs
-/// back in a ring; `auto`, the default, holds them except on AMD CPUs). Results are
-/// the same bits under every `stores`.
+/// `stores` (`auto` | `held` | `direct`: whether a batch over a Disney closure
+/// stores its outputs after later loads, in calls of 32768 lanes or more whose output
+/// rows collide with their input rows in the L2 cache through a ring; `auto`, the
+/// default, holds them except on AMD CPUs). Results are the same bits under every
+/// `stores`.
 ///
 /// # Safety
 /// `config` is NULL or a NUL-terminated string; `out` is valid for writes.

@@ -41,20 +41,23 @@ use crate::simd::Kernels;
 /// host's loop keeps in cache, gain nothing from it and store directly.
 pub const STREAMING_LANES: usize = 1 << 15;
 
-/// How a streaming call whose rows [`collide`] stores its outputs: the runtime's
-/// `stores=` setting, carried by its [`Kernels`].
+/// Whether the fused kernels hold their outputs back, after later loads: the runtime's
+/// `stores=` setting, carried by its [`Kernels`]. Held, a streaming call whose rows
+/// [`collide`] stores through the ring, and the fused eval elsewhere stores each
+/// register's sums two registers later (`kernels::fused`, against 4K aliasing).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Stores {
     /// [`Stores::Held`], except on AMD's CPUs ([`crate::simd::is_amd`]), where
-    /// [`Stores::Direct`]: the ring was measured to gain on an Intel Xeon (the module
+    /// [`Stores::Direct`]: holding was measured to gain on an Intel Xeon (the module
     /// doc) and to lose on an AMD EPYC (Zen 3, AVX2). There, in `bench_vs_mitsuba.py`'s
     /// arrays at 1M lanes (`bench_glint_pair.py`, one library under both settings, four
     /// runs of 11 rounds, both orders), the Disney closure's eval was 13-17% faster
-    /// direct (median paired ratios 1.13-1.17), its sample 0-3%. Other CPUs of either
-    /// vendor are unmeasured.
+    /// without the ring (median paired ratios 1.13-1.17), its sample 0-3%; the eval's
+    /// direct stores in place of two registers later, 4-5% at 4096 lanes. Other CPUs
+    /// of either vendor are unmeasured.
     #[default]
     Auto,
-    /// Through the ring.
+    /// After later loads: through the ring, or two registers later.
     Held,
     /// To the caller's rows as computed.
     Direct,
@@ -72,7 +75,7 @@ impl Stores {
         }
     }
 
-    /// Whether streaming calls whose rows collide hold their outputs back.
+    /// Whether the kernels hold their outputs back.
     pub fn hold(self) -> bool {
         match self {
             Stores::Auto => !crate::simd::is_amd(),

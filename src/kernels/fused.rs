@@ -300,9 +300,17 @@ fn store_sums<L: Lane>(
 
 /// One register at a time: two (`Lane::Interleaved`) measured slower on a Sapphire
 /// Rapids Xeon (full Disney closure, AVX-512: 266 against 287 M lanes/s; AVX2 211, 209).
+/// Each register's sums are stored as computed (`stores=direct`).
 #[inline(always)]
 fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
-    eval_lanes::<S, L, false>(job, None)
+    eval_lanes::<S, L, false, false>(job, None)
+}
+
+/// [`eval_body`] with each register's sums stored two registers later
+/// (`stores=held`, see `eval_lanes`).
+#[inline(always)]
+fn eval_late_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
+    eval_lanes::<S, L, false, true>(job, None)
 }
 
 /// [`eval_body`] with the outputs held back in the job's ring ([`delay`]): a kernel
@@ -310,12 +318,13 @@ fn eval_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
 #[inline(always)]
 fn eval_held_body<S: Shape, L: Lane>(job: &mut FusedEvalJob<'_>) -> bool {
     let ring = job.held.take();
-    eval_lanes::<S, L, true>(job, ring)
+    eval_lanes::<S, L, true, false>(job, ring)
 }
 
-/// [`eval_body`] with its outputs held back in `ring` (when given, see [`delay`]).
+/// [`eval_body`] with its outputs held back in `ring` (when given, see [`delay`]), or
+/// (`LATE`) stored two registers later.
 #[inline(always)]
-fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
+fn eval_lanes<S: Shape, L: Lane, const HELD: bool, const LATE: bool>(
     job: &mut FusedEvalJob<'_>,
     mut ring: Option<&mut EvalRing>,
 ) -> bool {
@@ -331,14 +340,17 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
         .value
         .as_mut()
         .map(|[r, g, b]| [&mut r[..len], &mut g[..len], &mut b[..len]]);
-    // Without a ring each register's sums are stored two registers later, after the
-    // next loads: a host's rows often lie within a few hundred bytes of each other
-    // modulo 4 KB (the script's at 4096 lanes), and a load waits on an older store
-    // whose address matches its bits 0-11 (4K aliasing). Paired C loop, 4096 lanes:
+    // `LATE`: each register's sums stored two registers later, after the next loads:
+    // a host's rows often lie within a few hundred bytes of each other modulo 4 KB
+    // (the script's at 4096 lanes), and a load waits on an older store whose address
+    // matches its bits 0-11 (4K aliasing). Intel Xeon, paired C loop, 4096 lanes:
     // +7.8% in the script's layout, +4% with the rows 16 KB apart (one register
-    // later gained half as much, three lost 2-3%). A held call instead loads each
-    // register's directions one register ahead: more loads in flight over rows that
-    // stream (1M lanes, +2% to +7%); without a ring that cost 8% at 4096 lanes.
+    // later gained half as much, three lost 2-3%). On an AMD EPYC (Zen 3, AVX2) the
+    // direct stores were faster, +4.3% and +5.2% at 4096 lanes and +1.4% at 1M in the
+    // script's layout (the values carried cost stack spills), hence `stores=`
+    // (`delay::Stores`). A held call instead loads each register's directions one
+    // register ahead: more loads in flight over rows that stream (1M lanes, +2% to
+    // +7%); without a ring that cost 8% at 4096 lanes.
     let (mut pending, mut later) = (None, None);
     let shifts = delay::eval_shifts::<L>(&value, job.pdf);
     let first = if HELD { 0 } else { len };
@@ -376,7 +388,8 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool>(
                 store_sums(sums, &mut rgb, pdf, i % DELAY, L::LANES);
                 delay::wrap_eval::<L>(ring, &mut value, job.pdf, i);
             }
-            None => later = Some((sums, i, n)),
+            None if LATE => later = Some((sums, i, n)),
+            None => store_sums(sums, &mut value, job.pdf, i, n),
         }
     }
     if let Some((sums, k, m)) = pending {
@@ -761,6 +774,10 @@ kernel!(
     eval<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_body
 );
 kernel!(
+    /// [`eval`] with each register's sums stored two registers later (`eval_late_body`).
+    eval_late<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_late_body
+);
+kernel!(
     /// [`eval`] with its outputs held back in the job's ring (`eval_held_body`).
     eval_held<S: Shape>(job: &mut FusedEvalJob<'_>) -> bool => eval_held_body
 );
@@ -799,6 +816,7 @@ const SHAPES: [(
     Matches,
     FusedEval,
     FusedEval,
+    FusedEval,
     FusedSample,
     FusedSample,
     FusedRowsSample,
@@ -806,6 +824,7 @@ const SHAPES: [(
     (
         Every::matches,
         eval::<Every>,
+        eval_late::<Every>,
         eval_held::<Every>,
         sample::<Every>,
         sample_held::<Every>,
@@ -814,6 +833,7 @@ const SHAPES: [(
     (
         NoClearcoat::matches,
         eval::<NoClearcoat>,
+        eval_late::<NoClearcoat>,
         eval_held::<NoClearcoat>,
         sample::<NoClearcoat>,
         sample_held::<NoClearcoat>,
@@ -822,6 +842,7 @@ const SHAPES: [(
     (
         NoSheen::matches,
         eval::<NoSheen>,
+        eval_late::<NoSheen>,
         eval_held::<NoSheen>,
         sample::<NoSheen>,
         sample_held::<NoSheen>,
@@ -830,6 +851,7 @@ const SHAPES: [(
     (
         Plastic::matches,
         eval::<Plastic>,
+        eval_late::<Plastic>,
         eval_held::<Plastic>,
         sample::<Plastic>,
         sample_held::<Plastic>,
@@ -838,6 +860,7 @@ const SHAPES: [(
     (
         Metal::matches,
         eval::<Metal>,
+        eval_late::<Metal>,
         eval_held::<Metal>,
         sample::<Metal>,
         sample_held::<Metal>,
@@ -858,6 +881,8 @@ pub fn for_rows(models: &[Option<TypeId>]) -> Option<FusedRowsSample> {
 /// The fused kernels of a closure's shape, and its lobes as their jobs take them.
 pub struct Fused<'a> {
     pub eval: FusedEval,
+    /// `eval` storing each register's sums two registers later.
+    pub eval_late: FusedEval,
     /// `eval` for a job with a ring ([`FusedEvalJob::held`]).
     pub eval_held: FusedEval,
     pub sample: FusedSample,
@@ -877,7 +902,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
         *m = l.lobe.model();
     }
     let models = &models[..lobes.len()];
-    let &(_, eval, eval_held, sample, sample_held, _) =
+    let &(_, eval, eval_late, eval_held, sample, sample_held, _) =
         SHAPES.iter().find(|(matches, ..)| matches(models))?;
     let mut out = [FusedLobe {
         params: &[],
@@ -894,6 +919,7 @@ pub fn for_closure(closure: &Closure) -> Option<Fused<'_>> {
     }
     Some(Fused {
         eval,
+        eval_late,
         eval_held,
         sample,
         sample_held,
