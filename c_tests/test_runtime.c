@@ -40,7 +40,10 @@ static void runtime_create_accepts_valid_configs(void **state)
                                           "isa=auto\tisa=auto",
                                           "threads=0",
                                           "threads=1",
-                                          "isa=scalar threads=2"};
+                                          "isa=scalar threads=2",
+                                          "stores=auto",
+                                          "stores=held threads=1",
+                                          "stores=direct"};
     size_t i;
     (void)state;
     for (i = 0; i < sizeof configs / sizeof configs[0]; i++) {
@@ -110,6 +113,10 @@ static void runtime_create_errors(void **state)
     check_error(fx, glint_runtime_create("threads=-1", &rt), GLINT_ERROR_OUT_OF_RANGE);
     assert_error_mentions("threads");
     check_error(fx, glint_runtime_create("threads=many", &rt), GLINT_ERROR_OUT_OF_RANGE);
+    check_error(fx, glint_runtime_create("stores=sometimes", &rt), GLINT_ERROR_OUT_OF_RANGE);
+    assert_null(rt);
+    assert_error_mentions("sometimes");
+    assert_error_mentions("auto, held, direct");
     check_error(fx, glint_runtime_create("\xff\xfe=1", &rt), GLINT_ERROR_INVALID_ARGUMENT);
     check_error(fx, glint_runtime_create(NULL, NULL), GLINT_ERROR_NULL_POINTER);
     check_error(fx, glint_runtime_create("isa=auto", NULL), GLINT_ERROR_NULL_POINTER);

@@ -12,8 +12,9 @@ ring), more than a kernel change often gains; here both libraries take the scrip
 own inputs and output arrays (its NumPy layout, the same addresses for both), and
 rounds alternate between them: each round is `median_c` of one library, then of the
 other. One library may be given twice, its runtimes configured apart (`--old-config`,
-`--new-config`: runtime config items added to `isa=auto threads=1`). Reported per size and op: each library's median M lanes/s and the median,
-quartiles and count of the paired ratios NEW / OLD.
+`--new-config`: runtime config items added to `isa=auto threads=1`). Reported per size
+and op: each library's median M lanes/s and the median, quartiles and count of the
+paired ratios NEW / OLD.
 """
 
 import argparse

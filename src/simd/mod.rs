@@ -191,8 +191,8 @@ impl Isa {
     }
 }
 
-/// Proof that the CPU runs an ISA: the only handle to the SIMD kernels; with how
-/// their streaming calls store ([`Stores`]).
+/// Proof that the CPU runs an ISA: the only handle to the SIMD kernels; with whether
+/// their fused kernels hold their outputs back ([`Stores`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Kernels {
     isa: Isa,
@@ -253,7 +253,7 @@ impl Kernels {
         self.isa
     }
 
-    /// These kernels, their streaming calls storing as `stores` says.
+    /// These kernels, their fused kernels storing as `stores` says.
     pub fn with_stores(self, stores: Stores) -> Kernels {
         Kernels { stores, ..self }
     }
