@@ -442,7 +442,8 @@ fn held_and_direct() -> Vec<Kernels> {
 fn shared_closures_in_place_match_the_staged_path_bit_for_bit() {
     let mut rng = Rng::new(21);
     let all = closures(&mut rng);
-    // A call of STREAMING_LANES or more streams (kernels::delay); whether its rows,
+    // A call of STREAMING_LANES or more streams (kernels::delay): its fused kernels
+    // prefetch the rows they read, up to past their ends; whether its rows,
     // each allocated apart, collide and it holds its outputs back depends on where the
     // allocator puts them (the ring's own test is
     // outputs_held_back_are_those_stored_directly_bit_for_bit).

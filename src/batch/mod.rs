@@ -505,6 +505,7 @@ fn fused_eval(
         value: out.value.as_mut().map(|v| rows_mut(v, &local)),
         pdf: &mut out.pdf[local],
         held: None,
+        prefetch: delay::streaming(wo.x.len()),
     };
     if delay::streams(kernels, wo.x.len(), lanes.len()) && job.rows_collide() {
         return Some(with_scratch(|s| {
@@ -1075,6 +1076,7 @@ fn sample_block<'a, C: ClosureSource<'a>>(
             u: [u.u_lobe, u.u0, u.u1].map(|row| &row[start..end]),
             out: out.finish_rows(&(0..end - start)),
             held: None,
+            prefetch: delay::streaming(input.count),
         };
         let sample = if delay::streams(kernels, input.count, end - start) && job.rows_collide() {
             job.held = Some(s.rings.sample().rows_like(&job.out));

@@ -88,7 +88,13 @@ impl Stores {
 /// Whether a job of `lanes` lanes of a call of `count` on `kernels` may hold its
 /// outputs back: it does where some row it writes also [`collide`]s with one it reads.
 pub fn streams(kernels: Kernels, count: usize, lanes: usize) -> bool {
-    count >= STREAMING_LANES && lanes > DELAY && kernels.stores().hold()
+    streaming(count) && lanes > DELAY && kernels.stores().hold()
+}
+
+/// Whether a call of `count` lanes streams its rows from memory
+/// ([`STREAMING_LANES`]): its fused kernels prefetch them (`fused::PREFETCH_AHEAD`).
+pub fn streaming(count: usize) -> bool {
+    count >= STREAMING_LANES
 }
 
 /// Whether a row of `writes` starts within 2 KB of a row of `reads` in the L2

@@ -263,6 +263,24 @@ impl Kernels {
     }
 }
 
+/// Ask for the cache line of `row[at]` ahead of its load: a hint, with no effect on
+/// any value. `at` may lie past the row's end (a prefetch cannot fault), so that a
+/// loop need not check each row.
+#[inline(always)]
+pub fn prefetch(row: &[f32], at: usize) {
+    let line = row.as_ptr().wrapping_add(at).cast::<i8>();
+    #[cfg(target_arch = "x86_64")]
+    // `_mm_prefetch` is an unsafe fn in older Rust (rust-version is 1.89).
+    #[allow(unused_unsafe)]
+    // SAFETY: a prefetch reads no value and cannot fault, whatever the address, and
+    // every x86-64 CPU has SSE.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(line)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = line;
+}
+
 /// Whether this CPU is AMD's: the vendor string of CPUID's leaf 0.
 pub fn is_amd() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -359,6 +377,18 @@ fn map_math_lanes<L: Lane>(f: MathFn, x: &[f32], y: &[f32], out: &mut [f32]) {
 mod tests {
     use super::*;
     use crate::math::lane::ROW;
+
+    /// A prefetch is a hint: past a row's end, of an empty row or at an index whose
+    /// address wraps, it neither faults nor changes the row.
+    #[test]
+    fn prefetch_anywhere_is_harmless() {
+        let row = [1.0f32, 2.0, 3.0];
+        for at in [0, 2, 3, 16, 1 << 40, usize::MAX / 4, usize::MAX] {
+            prefetch(&row, at);
+            prefetch(&[], at);
+        }
+        assert_eq!(row, [1.0, 2.0, 3.0]);
+    }
 
     /// `gather_adjacent` and `gather_code_pairs_adjacent` of every lane index of `index`
     /// into `out`: per register, both cells of each (eight rows: the f32 pair, then the
