@@ -92,7 +92,7 @@ pub fn streams(kernels: Kernels, count: usize, lanes: usize) -> bool {
 }
 
 /// Whether a call of `count` lanes streams its rows from memory
-/// ([`STREAMING_LANES`]): its fused kernels prefetch them (`fused::PREFETCH_AHEAD`).
+/// ([`STREAMING_LANES`]): its fused kernels prefetch them (`fused::EVAL_AHEAD`).
 pub fn streaming(count: usize) -> bool {
     count >= STREAMING_LANES
 }

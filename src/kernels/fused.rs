@@ -54,7 +54,7 @@ pub struct FusedEvalJob<'a> {
     /// A ring to hold the outputs back in ([`delay`]), for calls that stream.
     pub held: Option<&'a mut EvalRing>,
     /// Whether the call streams ([`delay::streaming`]): the input rows are then
-    /// prefetched [`PREFETCH_AHEAD`] lanes ahead.
+    /// prefetched [`EVAL_AHEAD`] (or [`SAMPLE_AHEAD`]) lanes ahead.
     pub prefetch: bool,
 }
 
@@ -361,7 +361,7 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool, const LATE: bool>(
     for i in (0..len).step_by(L::LANES) {
         let n = L::LANES.min(len - i);
         if job.prefetch {
-            prefetch_ahead::<L>([wo_rows, wi_rows], i, len);
+            prefetch_ahead::<L, EVAL_AHEAD>([wo_rows, wi_rows], i, len);
         }
         let (wo, wi) = if HELD {
             let d = next;
@@ -412,19 +412,24 @@ fn eval_lanes<S: Shape, L: Lane, const HELD: bool, const LATE: bool>(
     true
 }
 
-/// Lanes ahead of its loads that a streaming fused kernel prefetches its input rows
+/// Lanes ahead of its loads that a streaming fused eval prefetches its input rows
 /// (512 bytes a row). AMD EPYC (Zen 5), the full Disney closure over
 /// `bench_vs_mitsuba.py`'s arrays at 1M lanes (`bench_glint_pair.py`, 9 rounds each):
-/// AVX-512 eval +20% to +31% at 128 lanes ahead (64: +25%, 256: +16% to +33%, 1024:
-/// +10%, 4096: +1%), sample +10% and +11%; AVX2 eval +27%, sample +7%. At 4096 lanes,
-/// whose rows the benchmark's loop keeps in cache, it cost up to 7%: there it is off.
-pub const PREFETCH_AHEAD: usize = 128;
+/// AVX-512 eval +20% to +31% at 128 lanes ahead (32: none, 64: +25%, 256: +16% to
+/// +33%, 1024: +10%, 4096: +1%); AVX2 +27%. At 4096 lanes, whose rows the benchmark's
+/// loop keeps in cache, it cost up to 7%: there it is off.
+pub const EVAL_AHEAD: usize = 128;
 
-/// The lines of `rows` (of `len` lanes) [`PREFETCH_AHEAD`] lanes past the register of
-/// lanes `i..` asked for: a line a row for each 16 lanes of the register.
+/// [`EVAL_AHEAD`] of the fused sample, whose registers take about four times as
+/// long: about as far ahead in time. Same machine and arrays, AVX-512: +10% and +11%
+/// at 128 lanes, 64 another +7% (32: -11%, 256: +3% to +5%); AVX2 at 128 lanes +7%.
+pub const SAMPLE_AHEAD: usize = 64;
+
+/// The lines of `rows` (of `len` lanes) `AHEAD` lanes past the register of lanes `i..`
+/// asked for: a line a row for each 16 lanes of the register.
 #[inline(always)]
-fn prefetch_ahead<L: Lane>(rows: [[&[f32]; 3]; 2], i: usize, len: usize) {
-    let at = i + PREFETCH_AHEAD;
+fn prefetch_ahead<L: Lane, const AHEAD: usize>(rows: [[&[f32]; 3]; 2], i: usize, len: usize) {
+    let at = i + AHEAD;
     let [[a, b, c], [d, e, f]] = rows;
     if at < len {
         for k in 0..L::LANES.div_ceil(16) {
@@ -611,7 +616,7 @@ fn sample_lanes<'a, S: Shape, L: Lane>(
     for i in (0..len).step_by(L::LANES) {
         let n = L::LANES.min(len - i);
         if job.prefetch {
-            prefetch_ahead::<L>([wo_rows, u_rows], i, len);
+            prefetch_ahead::<L, SAMPLE_AHEAD>([wo_rows, u_rows], i, len);
         }
         let wo = direction(wo_rows, i, n, Directions::Raw, &mut out_of_range);
         let u_lobe = load::<L>(u_rows[0], i, n, 0.5);
