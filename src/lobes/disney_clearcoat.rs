@@ -125,12 +125,12 @@ impl Model for DisneyClearcoat {
         // e(h) = e(s) / |s|^2 and cos_h / v.h = 2 c s.z / |s|^2, so one division serves
         // both: e(s) >= a^2 |s|^2 >= 1.5e-8 and c_i, c_o >= 0.25.
         let e = p.gtr1.denominator(h);
-        let (c_i, c_o) = (smith_denominator(wi.z), smith_denominator(wo.z));
-        let inv = L::one() / L::select(ok, e * c_i * c_o, L::one());
+        let c_io = smith_denominator(wi.z) * smith_denominator(wo.z);
+        let inv = L::one() / L::select(ok, e * c_io, L::one());
         let norm = p.gtr1.norm;
         let pdf = L::select(
             ok,
-            L::splat(0.5) * norm * h.z * half.scale * c_i * c_o * inv,
+            L::splat(0.5) * norm * h.z * half.scale * c_io * inv,
             L::zero(),
         );
         let fr = L::splat(0.96).mul_add(half.fh, L::splat(0.04));

@@ -56,6 +56,10 @@ pub struct Prepared<L> {
     base_color: Rgb<L>,
     roughness: L,
     subsurface: L,
+    /// The blend's weights with `1 / pi` (and `ss`'s 1.25) in them: `(1 - subsurface)
+    /// / pi`, `1.25 subsurface / pi`, so that an eval does not multiply by them.
+    fd_weight: L,
+    ss_weight: L,
 }
 
 /// `mix(1, F90, FL) mix(1, F90, FV) = (1 + (F90 - 1) FL) (1 + (F90 - 1) FV)`. A
@@ -66,9 +70,9 @@ fn fresnel_pair<L: Lane>(f90_minus_1: L, (fl, fv): (L, L)) -> L {
     f90_minus_1.mul_add(fl, L::one()) * f90_minus_1.mul_add(fv, L::one())
 }
 
-/// `mix(Fd, ss, subsurface) cos_i`, 0 unless both directions are above the surface.
-/// `ss cos_i` is written `1.25 (Fss (cos_i / (cos_i + cos_o) - cos_i / 2) + cos_i / 2)`,
-/// finite for any positive cosines.
+/// `mix(Fd, ss, subsurface) cos_i / pi`, 0 unless both directions are above the
+/// surface. `ss cos_i` is written `1.25 (Fss (cos_i / (cos_i + cos_o) - cos_i / 2) +
+/// cos_i / 2)`, finite for any positive cosines.
 #[inline(always)]
 fn shape<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>) -> L {
     let ok = both_above(wo, wi);
@@ -92,8 +96,8 @@ fn shape<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>) -> L {
     // Where a direction is below the surface the sum may be 0: divided by 1 there, and
     // selected away below.
     let ratio = cos_i / L::select(ok, cos_i + cos_o, L::one());
-    let ss = L::splat(1.25) * fss.mul_add(ratio - half, half);
-    let mixed = (fd * cos_i).mul_add(L::one() - p.subsurface, ss * p.subsurface);
+    let ss = fss.mul_add(ratio - half, half);
+    let mixed = (fd * cos_i).mul_add(p.fd_weight, ss * p.ss_weight);
     L::select(ok, mixed, L::zero())
 }
 
@@ -251,10 +255,13 @@ impl Model for DisneyDiffuse {
 
     #[inline(always)]
     fn prepare<L: Lane>(params: Params<'_, L>) -> Prepared<L> {
+        let subsurface = params.float(SUBSURFACE);
         Prepared {
             base_color: params.rgb(BASE_COLOR),
             roughness: params.float(ROUGHNESS),
-            subsurface: params.float(SUBSURFACE),
+            subsurface,
+            fd_weight: (L::one() - subsurface) * L::splat(INV_PI),
+            ss_weight: subsurface * L::splat(1.25 * INV_PI),
         }
     }
 
@@ -262,7 +269,7 @@ impl Model for DisneyDiffuse {
     fn eval<L: Lane>(p: &Prepared<L>, wo: Vec3<L>, wi: Vec3<L>, _mode: Transport) -> Eval<L> {
         let pdf = L::select(both_above(wo, wi), wi.z, L::zero()) * L::splat(INV_PI);
         Eval {
-            value: p.base_color * (shape(p, wo, wi) * L::splat(INV_PI)),
+            value: p.base_color * shape(p, wo, wi),
             pdf,
         }
     }
