@@ -178,8 +178,8 @@ impl Model for DisneySpecular {
         let a_o = smith_denominator(wo, p.gx, p.gy);
         let b = wo.z + p.dist.sigma(wo, wo.z);
         let len2 = half.sum_len2;
-        // `a_i a_o` once for both: each multiply is one of the two pipes a fused eval
-        // is bound by (AMD Zen 5, AVX-512).
+        // `a_i a_o` once for both: a fused eval's multiplies share two pipes (AMD Zen
+        // 5), and each one saved counts.
         let a_io = a_i * a_o;
         // 1 / (q(h)^2 a_i a_o b).
         let inv = len2 * len2 / L::select(ok, q * q * a_io * b, L::one());
